@@ -1,0 +1,1 @@
+"""Private implementation of drive_envelope. Import from the public modules instead."""

@@ -1,0 +1,36 @@
+"""``drive-envelope envelope show FILE``: print an envelope file as a table with its corner points."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+ORDER = 10
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``envelope`` command group."""
+    parser = subparsers.add_parser("envelope", help="inspect envelope files")
+    actions = parser.add_subparsers(dest="envelope_command", metavar="ACTION")
+    show = actions.add_parser("show", help="print an envelope file as a table with its corner points")
+    show.add_argument("file", metavar="FILE", help="envelope file (TOML or JSON)")
+    show.add_argument("--json", action="store_true", help="print one JSON object (SI) instead of the table")
+    show.set_defaults(func=_show)
+    parser.set_defaults(func=lambda args: _usage(parser))
+
+
+def _usage(parser: argparse.ArgumentParser) -> int:
+    parser.print_help()
+    return 2
+
+
+def _show(args: argparse.Namespace) -> int:
+    from drive_envelope._src.cli.common import envelope_table
+    from drive_envelope._src.io.envelope_file import envelope_to_json, load_envelope
+
+    envelope = load_envelope(args.file)
+    if args.json:
+        print(envelope_to_json(envelope), end="")
+    else:
+        print(envelope_table(envelope))
+    return 0

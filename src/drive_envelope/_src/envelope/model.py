@@ -1,0 +1,308 @@
+"""The performance envelope: two coupled linear limits in the (joint velocity, drive effort) plane.
+
+For a joint velocity ``v`` and a drive effort ``tau`` (joint side, SI) the envelope admits::
+
+    |tau| <= max_effort - velocity_dependent_resistance * |v|          (eq. 1, torque-speed line)
+    |v|   <= max_actuator_velocity - speed_effort_gradient * |tau|     (eq. 2, speed-torque line)
+
+The feasible region is symmetric under ``(v, tau) -> (-v, tau)`` and ``(v, tau) -> (v, -tau)``: the
+braking quadrants (effort opposite to velocity) obey the same curves as the driving ones.
+
+::
+
+          tau
+           ^  stall (0, tau_0)
+           |______
+           |      \\___ eq. 1      corner: both lines bind
+           |          \\___  /
+           |               *
+           |                \\  eq. 2
+           +-----------------+----> v
+                         no-load (v_0, 0)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal, NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope.errors import InputError
+
+__all__ = ["ENVELOPE_FIELDS", "JointType", "PerformanceEnvelope", "QuadrantCorners"]
+
+JointType = Literal["revolute", "prismatic"]
+ENVELOPE_FIELDS = ("max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient")
+_JOINT_TYPES = ("revolute", "prismatic")
+
+ArrayLike = npt.ArrayLike
+FloatArray = npt.NDArray[np.float64]
+
+
+class QuadrantCorners(NamedTuple):
+    """Corner points of the feasible region in the first quadrant (v >= 0, effort >= 0).
+
+    Every point is ``(velocity [rad/s or m/s], effort [N*m or N])``.
+    """
+
+    stall: tuple[float, float]
+    """Largest effort at zero velocity: ``(0, min(max_effort, max_actuator_velocity / gradient))``."""
+    corner: tuple[float, float] | None
+    """Where eq. 1 and eq. 2 both bind, or None when one line lies inside the other."""
+    no_load: tuple[float, float]
+    """Largest velocity at zero effort: ``(min(max_actuator_velocity, max_effort / resistance), 0)``."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class PerformanceEnvelope:
+    """The PhysX drive performance envelope of one joint axis, joint side, SI units.
+
+    Invalid values raise :class:`~drive_envelope.errors.InputError` (a ``ValueError``) naming the
+    field and the value.
+    """
+
+    max_effort: float
+    """Effort cap at zero velocity, PhysX ``maxEffort`` (the drive's maxForce) [N*m or N]. ``>= 0``,
+    finite; 0 allows no effort at all."""
+    max_actuator_velocity: float = math.inf
+    """Velocity cap at zero effort, PhysX ``maxActuatorVelocity`` [rad/s or m/s]. ``>= 0``;
+    ``inf`` means no speed limit."""
+    velocity_dependent_resistance: float = 0.0
+    """Effort lost per unit speed, slope of eq. 1, PhysX ``velocityDependentResistance``
+    [N*m*s/rad or N*s/m]. ``>= 0``, finite."""
+    speed_effort_gradient: float = 0.0
+    """Speed lost per unit effort, slope of eq. 2, PhysX ``speedEffortGradient``
+    [(rad/s)/(N*m) or (m/s)/N]. ``>= 0``, finite."""
+    joint: JointType = "revolute"
+    """Joint type, which fixes the units: ``"revolute"`` (N*m, rad/s) or ``"prismatic"`` (N, m/s)."""
+    name: str = ""
+    """Free-form label (actuator name), empty if none."""
+
+    def __post_init__(self) -> None:
+        if self.joint not in _JOINT_TYPES:
+            raise InputError(f"joint must be 'revolute' or 'prismatic', got {self.joint!r}")
+        for field in ENVELOPE_FIELDS:
+            value = getattr(self, field)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+                raise InputError(f"{field} must be a number, got {value!r}")
+            value = float(value)
+            object.__setattr__(self, field, value)
+            if math.isnan(value) or value < 0.0:
+                raise InputError(f"{field} must be >= 0, got {value!r}")
+            if math.isinf(value) and field != "max_actuator_velocity":
+                raise InputError(f"{field} must be finite, got {value!r}")
+
+    # -- the two curves -------------------------------------------------------------------------
+
+    def effort_limit(self, velocity: ArrayLike) -> FloatArray:
+        """Largest |effort| the envelope allows at joint velocity ``velocity`` (eq. 1 and eq. 2).
+
+        Args:
+            velocity: Joint velocity [rad/s or m/s]; any shape, only ``|velocity|`` matters.
+
+        Returns:
+            ``min(max_effort - R*|v|, (v_max - |v|)/G)`` clipped at 0 [N*m or N]; the ``(v_max-|v|)/G``
+            term is dropped when ``G = 0`` and then ``|v| > v_max`` gives 0. 0 means no effort is
+            feasible at that speed.
+        """
+        speed = np.abs(np.asarray(velocity, dtype=np.float64))
+        limit = self.max_effort - self.velocity_dependent_resistance * speed
+        if self.speed_effort_gradient > 0.0:
+            limit = np.minimum(limit, (self.max_actuator_velocity - speed) / self.speed_effort_gradient)
+        else:
+            limit = np.where(speed > self.max_actuator_velocity, 0.0, limit)
+        return np.maximum(limit, 0.0)
+
+    def velocity_limit(self, effort: ArrayLike) -> FloatArray:
+        """Largest |velocity| the envelope allows while the drive exerts ``effort`` (eq. 1 and eq. 2).
+
+        Args:
+            effort: Drive effort [N*m or N]; any shape, only ``|effort|`` matters.
+
+        Returns:
+            ``min(v_max - G*|tau|, (max_effort - |tau|)/R)`` clipped at 0 [rad/s or m/s] (``inf``
+            possible); with ``R = 0`` the second term is dropped and ``|tau| > max_effort`` gives 0.
+        """
+        magnitude = np.abs(np.asarray(effort, dtype=np.float64))
+        limit = self.max_actuator_velocity - self.speed_effort_gradient * magnitude
+        if self.velocity_dependent_resistance > 0.0:
+            limit = np.minimum(limit, (self.max_effort - magnitude) / self.velocity_dependent_resistance)
+        else:
+            limit = np.where(magnitude > self.max_effort, 0.0, limit)
+        return np.maximum(limit, 0.0)
+
+    def contains(self, velocity: ArrayLike, effort: ArrayLike, *, atol: float = 0.0) -> npt.NDArray[np.bool_]:
+        """Whether the operating points ``(velocity, effort)`` satisfy both curves.
+
+        Args:
+            velocity: Joint velocity [rad/s or m/s]; broadcast with ``effort``.
+            effort: Drive effort [N*m or N].
+            atol: Slack added to the right-hand side of both inequalities, in their own units.
+
+        Returns:
+            Boolean array of the broadcast shape.
+        """
+        speed = np.abs(np.asarray(velocity, dtype=np.float64))
+        magnitude = np.abs(np.asarray(effort, dtype=np.float64))
+        eq1 = magnitude <= self.max_effort - self.velocity_dependent_resistance * speed + atol
+        eq2 = speed <= self.max_actuator_velocity - self.speed_effort_gradient * magnitude + atol
+        return np.logical_and(eq1, eq2)
+
+    def margins(self, velocity: ArrayLike, effort: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Signed distance of each operating point to each curve, positive inside.
+
+        Returns:
+            ``(effort_margin, velocity_margin)``: ``max_effort - R|v| - |tau|`` [N*m or N] and
+            ``v_max - G|tau| - |v|`` [rad/s or m/s].
+        """
+        speed = np.abs(np.asarray(velocity, dtype=np.float64))
+        magnitude = np.abs(np.asarray(effort, dtype=np.float64))
+        effort_margin = self.max_effort - self.velocity_dependent_resistance * speed - magnitude
+        velocity_margin = self.max_actuator_velocity - self.speed_effort_gradient * magnitude - speed
+        return effort_margin, velocity_margin
+
+    # -- geometry -------------------------------------------------------------------------------
+
+    def stall_effort(self) -> float:
+        """Largest effort at zero velocity [N*m or N]."""
+        return float(self.effort_limit(0.0))
+
+    def no_load_velocity(self) -> float:
+        """Largest velocity at zero effort [rad/s or m/s] (``inf`` when unbounded)."""
+        return float(self.velocity_limit(0.0))
+
+    def corners(self, *, velocity_extent: float | None = None) -> QuadrantCorners:
+        """Corner points of the first quadrant; the other quadrants mirror them.
+
+        Args:
+            velocity_extent: Cut for a region unbounded in velocity, as in :meth:`boundary`.
+        """
+        path = self.quadrant_path(velocity_extent=velocity_extent)
+        interior = [tuple(map(float, p)) for p in path[1:-1] if p[0] > 0.0 and p[1] > 0.0]
+        corner = (interior[0][0], interior[0][1]) if interior else None
+        return QuadrantCorners(
+            stall=(0.0, float(path[-1][1])), corner=corner, no_load=(float(path[0][0]), 0.0)
+        )
+
+    def quadrant_path(self, *, velocity_extent: float | None = None) -> FloatArray:
+        """Outer boundary in the first quadrant, from the no-load point to the stall point.
+
+        Args:
+            velocity_extent: Cut for a region unbounded in velocity, as in :meth:`boundary`.
+
+        Returns:
+            Array ``(K, 2)`` of ``(velocity, effort)`` vertices, ``K`` in 2..3.
+        """
+        v0 = self.no_load_velocity()
+        if math.isinf(v0):
+            if velocity_extent is None or not velocity_extent > 0:
+                raise InputError("the envelope is unbounded in velocity: pass velocity_extent > 0")
+            v0 = float(velocity_extent)
+        return _clip_quadrant(self, v0, self.stall_effort())
+
+    def boundary(self, *, velocity_extent: float | None = None) -> FloatArray:
+        """Polygon of the feasible region in the (velocity, effort) plane, all four quadrants.
+
+        Args:
+            velocity_extent: Where to cut the region when it is unbounded in velocity
+                (``max_actuator_velocity = inf`` and ``velocity_dependent_resistance = 0``)
+                [rad/s or m/s]. Ignored for a bounded region.
+
+        Returns:
+            Array of shape ``(K, 2)``: vertices ``(velocity, effort)`` counter-clockwise starting at
+            the positive no-load point, every corner included, the first vertex not repeated.
+
+        Raises:
+            InputError: the region is unbounded and no ``velocity_extent`` was given.
+        """
+        path = self.quadrant_path(velocity_extent=velocity_extent)
+        flip_v, flip_both, flip_tau = np.array([-1.0, 1.0]), np.array([-1.0, -1.0]), np.array([1.0, -1.0])
+        polygon = np.concatenate(
+            [path, (path[::-1] * flip_v)[1:], (path * flip_both)[1:], (path[::-1] * flip_tau)[1:-1]]
+        )
+        return _dedupe(polygon + 0.0)  # + 0.0 turns -0.0 into 0.0
+
+    # -- conversion -----------------------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain dict with the SI values (``inf`` stays a float); ``from_dict`` inverts it."""
+        data: dict[str, object] = {"name": self.name, "joint": self.joint}
+        data.update({field: getattr(self, field) for field in ENVELOPE_FIELDS})
+        return data
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, object], *, source: str = "envelope") -> PerformanceEnvelope:
+        """Build an envelope from a mapping of SI numbers or strings with units.
+
+        Args:
+            data: Keys ``max_effort`` (required), ``max_actuator_velocity`` (default inf),
+                ``velocity_dependent_resistance``, ``speed_effort_gradient`` (default 0), ``joint``
+                (default "revolute"), ``name``. Values are SI numbers, ``"inf"``, or strings with units.
+            source: File name or label used in error messages.
+
+        Raises:
+            InputError: unknown key (with the nearest valid one), missing ``max_effort``, a value of
+                the wrong unit, negative, NaN or infinite where not allowed.
+        """
+        from drive_envelope._src.envelope.parse import envelope_from_mapping
+
+        return envelope_from_mapping(data, source=source)
+
+
+def _clip_quadrant(env: PerformanceEnvelope, v0: float, tau0: float) -> FloatArray:
+    """First-quadrant region: the box [0, v0] x [0, tau0] clipped by both half-planes.
+
+    Returns the vertices from the no-load point (v0, 0) to the stall point (0, tau0), along the
+    outer boundary (the origin and the axes are dropped).
+    """
+    box = [(0.0, 0.0), (v0, 0.0), (v0, tau0), (0.0, tau0)]
+    resistance, gradient = env.velocity_dependent_resistance, env.speed_effort_gradient
+    # half-plane a*v + b*tau <= c
+    planes = [(resistance, 1.0, env.max_effort)]
+    if math.isfinite(env.max_actuator_velocity):
+        planes.append((1.0, gradient, env.max_actuator_velocity))
+    polygon = box
+    for a, b, c in planes:
+        polygon = _clip_polygon(polygon, a, b, c)
+    points = np.array(polygon, dtype=np.float64).reshape(-1, 2)
+    # walk from (v0, 0) counter-clockwise to (0, tau0): drop the origin
+    outer = [tuple(p) for p in points if not (p[0] == 0.0 and p[1] == 0.0)]
+    if not outer:  # the region is the origin alone
+        return np.zeros((1, 2))
+    start = min(range(len(outer)), key=lambda i: (outer[i][1], -outer[i][0]))
+    ordered = outer[start:] + outer[:start]
+    return _dedupe(np.array(ordered, dtype=np.float64).reshape(-1, 2))
+
+
+def _clip_polygon(
+    polygon: list[tuple[float, float]], a: float, b: float, c: float
+) -> list[tuple[float, float]]:
+    """Sutherland-Hodgman clip of a convex polygon by the half-plane ``a*v + b*tau <= c``."""
+    result: list[tuple[float, float]] = []
+    count = len(polygon)
+    for i in range(count):
+        p, q = polygon[i], polygon[(i + 1) % count]
+        fp, fq = a * p[0] + b * p[1] - c, a * q[0] + b * q[1] - c
+        if fp <= 0.0:
+            result.append(p)
+        if (fp < 0.0 < fq) or (fq < 0.0 < fp):
+            t = fp / (fp - fq)
+            result.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])))
+    return result
+
+
+def _dedupe(points: FloatArray) -> FloatArray:
+    """Drop consecutive (and wrap-around) duplicate vertices."""
+    if points.shape[0] < 2:
+        return points
+    keep = [0]
+    for i in range(1, points.shape[0]):
+        if not np.allclose(points[i], points[keep[-1]], rtol=1e-12, atol=1e-15):
+            keep.append(i)
+    if len(keep) > 1 and np.allclose(points[keep[-1]], points[keep[0]], rtol=1e-12, atol=1e-15):
+        keep.pop()
+    return points[keep]

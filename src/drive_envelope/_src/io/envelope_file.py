@@ -1,0 +1,52 @@
+"""Envelope files: TOML or JSON with ``name``, ``joint`` and the four envelope parameters."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Literal
+
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.io.atomic import atomic_write_text
+from drive_envelope._src.io.files import format_toml_value, read_mapping
+from drive_envelope._src.params.table import si_unit
+
+__all__ = ["envelope_to_json", "envelope_to_toml", "load_envelope", "save_envelope"]
+
+
+def load_envelope(path: str | os.PathLike[str]) -> PerformanceEnvelope:
+    """Read an envelope file (TOML, JSON or YAML; SI numbers or strings with units).
+
+    Raises:
+        InputError: a one-line message naming the file, the key and what was expected.
+    """
+    return PerformanceEnvelope.from_dict(read_mapping(path), source=str(path))
+
+
+def envelope_to_toml(envelope: PerformanceEnvelope) -> str:
+    """TOML text of an envelope file, SI values, units in comments."""
+    lines = []
+    if envelope.name:
+        lines.append(f"name = {format_toml_value(envelope.name)}")
+    lines.append(f"joint = {format_toml_value(envelope.joint)}")
+    for field in ENVELOPE_FIELDS:
+        value = getattr(envelope, field)
+        lines.append(f"{field} = {format_toml_value(value)}  # {si_unit(field, envelope.joint)}")
+    return "\n".join(lines) + "\n"
+
+
+def envelope_to_json(envelope: PerformanceEnvelope) -> str:
+    """JSON text of an envelope file; an infinite ``max_actuator_velocity`` is written as ``"inf"``."""
+    data = {k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in envelope.to_dict().items()}
+    return json.dumps(data, indent=2) + "\n"
+
+
+def save_envelope(
+    envelope: PerformanceEnvelope, path: str | os.PathLike[str], *, format: Literal["toml", "json"] | None = None
+) -> None:
+    """Write an envelope file atomically; the format follows the suffix unless ``format`` is given."""
+    chosen = format or ("json" if Path(path).suffix.lower() == ".json" else "toml")
+    text = envelope_to_json(envelope) if chosen == "json" else envelope_to_toml(envelope)
+    atomic_write_text(path, text)
