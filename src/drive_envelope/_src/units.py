@@ -11,6 +11,7 @@ Two traps are closed on purpose:
   ``r/min``) are read as rpm before parsing.
 * Datasheets print torques as ``kg*cm`` or ``oz*in`` (kilogram-force and ounce-force): where a
   torque is expected, a mass times a length is read as the corresponding force times length.
+* N*m and J share a dimension: a torque written in joules is refused (it is an energy column).
 """
 
 from __future__ import annotations
@@ -33,13 +34,19 @@ _SPELLINGS: tuple[tuple[str, str], ...] = (
     (r"\bOhm\b", "ohm"),
     (r"µ", "u"),
     (r"μ", "u"),
+    (r"⁻¹", "^-1"),
+    (r"²", "^2"),
     (r"\bmin\s*\^\s*-\s*1\b|\bmin\s*-\s*1\b|\b1\s*/\s*min\b|\br\s*/\s*min\b|\brev\s*/\s*min\b", "rpm"),
-    (r"\bkrpm\b", "(1000*rpm)"),
+    # what is left of "rev" is a revolution (a lead in mm/rev); pint knows it as "turn"
+    (r"\brev\b", "turn"),
     (r"\bm(Nm|N\.m|N-m)\b", "(mN*m)"),
     (r"\bNmm\b", "(N*mm)"),
     (r"\b(Nm|N\.m|N-m)\b", "(N*m)"),
+    (r"\bNcm\b", "(N*cm)"),
     (r"\bkgf?\s*[-*.·]?\s*cm\b", "(kgf*cm)"),
-    (r"\boz\s*[-*.·]?\s*in\b", "(ozf*in)"),
+    (r"\bozf?\s*[-*.·]?\s*in\b", "(ozf*in)"),
+    (r"\blbf?\s*[-*.·]?\s*in\b", "(lbf*in)"),
+    (r"\blbf?\s*[-*.·]?\s*ft\b", "(lbf*ft)"),
     (r"·", "*"),
     (r"%", "percent"),
 )
@@ -56,7 +63,7 @@ def get_registry() -> pint.UnitRegistry:
     """
     import pint
 
-    ureg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    ureg: Any = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
     ureg.define("kilogram_force_centimeter = kilogram_force * centimeter = kgfcm")
     return ureg
 
@@ -68,8 +75,9 @@ def _normalize_unit_text(text: str) -> str:
 
 
 def _radian_exponent(ureg: pint.UnitRegistry, units: Any) -> float:
-    root = ureg.get_root_units(units)[1]
-    return float(dict(root._units).get("radian", 0.0))  # noqa: SLF001 - pint has no public accessor
+    root: Any = ureg.get_root_units(units)[1]
+    exponent: Any = dict(root._units).get("radian", 0.0)  # pint has no public accessor
+    return float(exponent)
 
 
 def _parse(text: str, where: str) -> pint.Quantity:
@@ -94,6 +102,16 @@ def _torque_from_mass_length(q: pint.Quantity, expected: pint.Unit) -> pint.Quan
     ).dimensionality:
         return q * ureg.Quantity(1.0, "standard_gravity")
     return q
+
+
+def _is_energy_for_torque(quantity: pint.Quantity, expected: str) -> bool:
+    """Whether a torque-like quantity was written in joules.
+
+    N*m and J share a dimension, so pint accepts ``"2 J"`` as a torque; on a datasheet that is a
+    misread column (energy), never a torque, so it is refused rather than silently accepted.
+    """
+    names = dict(quantity.units._units)  # noqa: SLF001 - pint has no public accessor
+    return "N*m" in expected.replace(" ", "") and any(name.endswith("joule") for name in names)
 
 
 def to_si(value: object, expected: str, where: str) -> float:
@@ -131,12 +149,18 @@ def to_si(value: object, expected: str, where: str) -> float:
         raise UnitsError(
             f"{where}: {value!r} has dimension {quantity.dimensionality}, expected a quantity in {expected}"
         )
+    if _is_energy_for_torque(quantity, expected):
+        raise UnitsError(
+            f"{where}: {value!r} is an energy unit (J); a torque is expected here, in {expected} "
+            "(write N*m, mNm, ...)"
+        )
     if _radian_exponent(ureg, quantity.units) != _radian_exponent(ureg, target):
         raise UnitsError(
             f"{where}: {value!r} has no matching angle unit for {expected}; angles are explicit here "
             "(write rpm, rev/s, deg/s or rad/s: Hz and 1/s are ambiguous)"
         )
-    result = float(quantity.m_as(target))
+    magnitude: Any = quantity.m_as(target)
+    result = float(magnitude)
     if math.isnan(result):
         raise UnitsError(f"{where}: {value!r} is not a number")
     return result

@@ -24,15 +24,21 @@ def format_value(value: float | None, unit: str = "") -> str:
 
 def format_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     """Left-aligned plain-text table."""
-    widths = [max(len(str(cell)) for cell in column) for column in zip(header, *rows)]
-    lines = ["  ".join(str(cell).ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header, *rows]]
+    widths = [max(len(str(cell)) for cell in column) for column in zip(header, *rows, strict=True)]
+    lines = [
+        "  ".join(str(cell).ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip()
+        for row in [header, *rows]
+    ]
     lines.insert(1, "  ".join("-" * width for width in widths))
     return "\n".join(lines)
 
 
 def envelope_table(envelope: PerformanceEnvelope) -> str:
     """The envelope's parameters and first-quadrant corner points as text."""
-    rows = [[field, format_value(getattr(envelope, field)), si_unit(field, envelope.joint)] for field in ENVELOPE_FIELDS]
+    rows = [
+        [field, format_value(getattr(envelope, field)), si_unit(field, envelope.joint)]
+        for field in ENVELOPE_FIELDS
+    ]
     parts = []
     title = f"{envelope.name} ({envelope.joint})" if envelope.name else f"envelope ({envelope.joint})"
     parts.append(title)

@@ -25,7 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog=PROG,
-        description="The PhysX drive performance envelope: derive it from datasheets, inspect, simulate, check.",
+        description="The PhysX drive performance envelope: derive, inspect, simulate, check.",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")

@@ -3,8 +3,10 @@
 :func:`clamp_drive_impulse` is a vectorized port of PhysX 5.6+ ``Dy::clampDriveImpulse``
 (``physx/source/lowleveldynamics/shared/DyCpuGpuArticulation.h``): same argument order, same
 branches, same absolute epsilon ``2^-23`` (``PX_EPS_F32``), same ``FLT_MAX`` sentinels, same
-``PxMax``/``PxMin`` select semantics (``a < b ? b : a``, which decides what a NaN turns into). It
-computes in float64 by default; ``dtype=numpy.float32`` reproduces PhysX bit for bit.
+float ``PxMax``/``PxMin`` select semantics (``a > b ? a : b`` and ``a < b ? a : b``, PhysX's
+``intrinsics::selectMax``/``selectMin`` on Linux, which decide what a NaN turns into). It computes in
+float64 by default; ``dtype=numpy.float32`` reproduces PhysX bit for bit (checked against vectors
+from PhysX itself in ``tests/test_envelope_physx_vectors.py``).
 
 The implicit clamp finds the largest total impulse ``x`` (same sign as the request, not above it)
 such that ``x`` and the joint velocity after applying it, ``v(x) = v0 + r*(x - x0)``, satisfy::
@@ -80,26 +82,33 @@ def clamp_effort_implicit(
     """
     if not dt > 0.0:
         raise ValueError(f"dt must be > 0, got {dt!r}")
+    requested = np.asarray(requested_effort, dtype=np.float64)
     impulse = clamp_drive_impulse(
         velocity,
         np.asarray(applied_effort, dtype=np.float64) * dt,
-        np.asarray(requested_effort, dtype=np.float64) * dt,
+        requested * dt,
         response,
         envelope.max_actuator_velocity,
         envelope.max_effort * dt,
         envelope.speed_effort_gradient / dt,
         envelope.velocity_dependent_resistance * dt,
     )
-    return impulse / dt
+    # (x*dt)/dt can round one ulp above x: the clamp never grows a request, so neither may we
+    return np.copysign(np.minimum(np.abs(impulse / dt), np.abs(requested)), impulse)
 
 
 def _pmax(a: Array, b: Array) -> Array:
-    """``PxMax``: ``a < b ? b : a`` (a NaN in ``a`` survives, a NaN in ``b`` does not)."""
-    return np.where(a < b, b, a)
+    """``PxMax(float)``: ``a > b ? a : b`` (a NaN in ``b`` survives, a NaN in ``a`` does not).
+
+    PhysX specializes ``PxMax`` for float to ``intrinsics::selectMax``, which differs from the generic
+    template ``a < b ? b : a`` exactly when a NaN is involved: the generic form would keep a NaN
+    bound (e.g. ``(dev - inf) / inf``) and turn it into a NaN impulse where PhysX returns a number.
+    """
+    return np.where(a > b, a, b)
 
 
 def _pmin(a: Array, b: Array) -> Array:
-    """``PxMin``: ``a < b ? a : b``."""
+    """``PxMin(float)``: ``a < b ? a : b`` (a NaN in ``b`` survives, a NaN in ``a`` does not)."""
     return np.where(a < b, a, b)
 
 
@@ -170,7 +179,7 @@ def clamp_drive_impulse(
     Returns:
         The clamped total drive impulse [N*m*s or N*s], of ``dtype``, broadcast shape.
     """
-    dt = np.dtype(dtype)
+    dt: np.dtype[Any] = np.dtype(dtype)
     v0, x0, x, r, max_v, max_x, grad, resist = (
         np.asarray(a, dtype=dt)
         for a in (

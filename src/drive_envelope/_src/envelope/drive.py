@@ -60,7 +60,8 @@ def implicit_drive_effort(
     if drive_type not in ("force", "acceleration"):
         raise ValueError(f"drive_type must be 'force' or 'acceleration', got {drive_type!r}")
     k, c, err, v, v_target, r = (
-        np.asarray(a, dtype=np.float64) for a in (stiffness, damping, position_error, velocity, target_velocity, response)
+        np.asarray(a, dtype=np.float64)
+        for a in (stiffness, damping, position_error, velocity, target_velocity, response)
     )
     a = dt * (dt * k + c)
     rhs = dt * k * err + dt * c * v_target - a * v

@@ -1,4 +1,4 @@
-"""The performance envelope: two coupled linear limits in the (joint velocity, drive effort) plane.
+r"""The performance envelope: two coupled linear limits in the (joint velocity, drive effort) plane.
 
 For a joint velocity ``v`` and a drive effort ``tau`` (joint side, SI) the envelope admits::
 
@@ -13,10 +13,10 @@ braking quadrants (effort opposite to velocity) obey the same curves as the driv
           tau
            ^  stall (0, tau_0)
            |______
-           |      \\___ eq. 1      corner: both lines bind
-           |          \\___  /
+           |      \___ eq. 1      corner: both lines bind
+           |          \___  /
            |               *
-           |                \\  eq. 2
+           |                \  eq. 2
            +-----------------+----> v
                          no-load (v_0, 0)
 """
@@ -36,7 +36,12 @@ from drive_envelope.errors import InputError
 __all__ = ["ENVELOPE_FIELDS", "JointType", "PerformanceEnvelope", "QuadrantCorners"]
 
 JointType = Literal["revolute", "prismatic"]
-ENVELOPE_FIELDS = ("max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient")
+ENVELOPE_FIELDS = (
+    "max_effort",
+    "max_actuator_velocity",
+    "velocity_dependent_resistance",
+    "speed_effort_gradient",
+)
 _JOINT_TYPES = ("revolute", "prismatic")
 
 ArrayLike = npt.ArrayLike

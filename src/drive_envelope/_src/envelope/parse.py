@@ -35,7 +35,9 @@ def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> Perform
         raise InputError(f"{source}: expected a table of envelope keys, got {type(data).__name__}")
     for key in data:
         if key not in _KEYS:
-            raise InputError(f"{source}: unknown key {key!r}{nearest_key(str(key), _KEYS)}; valid keys: {', '.join(_KEYS)}")
+            raise InputError(
+                f"{source}: unknown key {key!r}{nearest_key(str(key), _KEYS)}; valid keys: {', '.join(_KEYS)}"
+            )
     joint = data.get("joint", "revolute")
     if joint not in ("revolute", "prismatic"):
         raise InputError(f"{source}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
@@ -43,7 +45,10 @@ def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> Perform
     if not isinstance(name, str):
         raise InputError(f"{source}: key 'name': expected a string, got {name!r}")
     if "max_effort" not in data:
-        raise InputError(f"{source}: missing required key 'max_effort' (the drive's effort cap, {si_unit('max_effort', joint)})")
+        raise InputError(
+            f"{source}: missing required key 'max_effort' "
+            f"(the drive's effort cap, {si_unit('max_effort', joint)})"
+        )
     values: dict[str, float] = {}
     for field in ENVELOPE_FIELDS:
         if field in data:

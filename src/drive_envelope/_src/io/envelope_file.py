@@ -39,12 +39,17 @@ def envelope_to_toml(envelope: PerformanceEnvelope) -> str:
 
 def envelope_to_json(envelope: PerformanceEnvelope) -> str:
     """JSON text of an envelope file; an infinite ``max_actuator_velocity`` is written as ``"inf"``."""
-    data = {k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in envelope.to_dict().items()}
+    data = {
+        k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in envelope.to_dict().items()
+    }
     return json.dumps(data, indent=2) + "\n"
 
 
 def save_envelope(
-    envelope: PerformanceEnvelope, path: str | os.PathLike[str], *, format: Literal["toml", "json"] | None = None
+    envelope: PerformanceEnvelope,
+    path: str | os.PathLike[str],
+    *,
+    format: Literal["toml", "json"] | None = None,
 ) -> None:
     """Write an envelope file atomically; the format follows the suffix unless ``format`` is given."""
     chosen = format or ("json" if Path(path).suffix.lower() == ".json" else "toml")

@@ -39,7 +39,9 @@ def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
             try:
                 import yaml
             except ImportError:
-                raise InputError(f"{file}: YAML needs the 'yaml' extra (pip install 'drive-envelope[yaml]')") from None
+                raise InputError(
+                    f"{file}: YAML needs the 'yaml' extra (pip install 'drive-envelope[yaml]')"
+                ) from None
             data = yaml.safe_load(text)
         else:
             data = tomllib.loads(text)

@@ -1,0 +1,98 @@
+"""The CLI entry point and ``drive-envelope envelope show``."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from drive_envelope import PerformanceEnvelope, load_envelope, save_envelope
+from drive_envelope._src.cli.main import main
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "envelopes" / "demo.toml"
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "drive_envelope", *args], capture_output=True, text=True)
+
+
+def test_version_and_help() -> None:
+    """Print the version and the help through python -m."""
+    from drive_envelope import __version__
+
+    assert _run("--version").stdout.strip() == f"drive-envelope {__version__}"
+    result = _run("--help")
+    assert result.returncode == 0
+    assert "envelope" in result.stdout
+
+
+def test_show_prints_table_and_corners(capsys: pytest.CaptureFixture[str]) -> None:
+    """Show the parameters and the three corner points of the demo envelope."""
+    assert main(["envelope", "show", str(EXAMPLE)]) == 0
+    out = capsys.readouterr().out
+    assert "max_actuator_velocity" in out and "37.6991" in out  # 360 rpm
+    assert "stall" in out and "corner" in out and "no-load" in out
+
+
+def test_show_json_round_trips(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Print JSON that reads back as the same envelope, inf included."""
+    env = PerformanceEnvelope(max_effort=2.5, velocity_dependent_resistance=0.1, name="x")
+    path = tmp_path / "e.toml"
+    save_envelope(env, path)
+    assert main(["envelope", "show", "--json", str(path)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["max_actuator_velocity"] == "inf"
+    assert PerformanceEnvelope.from_dict(data) == env
+
+
+@pytest.mark.parametrize("suffix", [".toml", ".json"])
+def test_save_load_round_trip(tmp_path: Path, suffix: str) -> None:
+    """Write and read an envelope file without losing a bit."""
+    env = PerformanceEnvelope(
+        max_effort=1 / 3,
+        max_actuator_velocity=math.pi,
+        speed_effort_gradient=0.1,
+        joint="prismatic",
+        name='a "b"',
+    )
+    path = tmp_path / f"env{suffix}"
+    save_envelope(env, path)
+    assert load_envelope(path) == env
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]  # no temp file left
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("max_effort = [1", "malformed TOML"),
+        (
+            "max_effort = 1\nmax_velocity = 2\n",
+            "unknown key 'max_velocity' (did you mean 'max_actuator_velocity'?)",
+        ),
+        ("max_effort = -2\n", "max_effort must be >= 0, got -2.0"),
+        ('max_effort = "2 rpm"\n', "key 'max_effort'"),
+        ('max_effort = 1\nmax_actuator_velocity = "3 Hz"\n', "angle unit"),
+        ("joint = 'revolute'\n", "missing required key 'max_effort'"),
+    ],
+)
+def test_bad_file_exits_2_with_one_line(tmp_path: Path, content: str, message: str) -> None:
+    """Exit 2 with one line naming the file and the problem, no traceback."""
+    path = tmp_path / "bad.toml"
+    path.write_text(content)
+    result = _run("envelope", "show", str(path))
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"drive-envelope: error: {path}")
+    assert message in lines[0]
+
+
+def test_missing_file_exits_2() -> None:
+    """Name a missing file in a one-line error."""
+    result = _run("envelope", "show", "nope.toml")
+    assert result.returncode == 2
+    assert result.stderr.strip() == "drive-envelope: error: nope.toml: no such file"
