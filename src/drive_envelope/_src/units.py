@@ -12,6 +12,8 @@ Two traps are closed on purpose:
 * Datasheets print torques as ``kg*cm`` or ``oz*in`` (kilogram-force and ounce-force): where a
   torque is expected, a mass times a length is read as the corresponding force times length.
 * N*m and J share a dimension: a torque written in joules is refused (it is an energy column).
+
+Hobby-servo speeds are read as printed, time per angle: ``"0.14 s/60°"`` is 60 deg per 0.14 s.
 """
 
 from __future__ import annotations
@@ -80,11 +82,24 @@ def _radian_exponent(ureg: pint.UnitRegistry, units: Any) -> float:
     return float(exponent)
 
 
+# A hobby servo's speed as printed: time per angle, "0.14 s/60°" or "0.17 sec/60 deg".
+_SERVO_SPEED = re.compile(
+    r"^\s*(\d+\.?\d*|\.\d+)\s*(?:s|sec|seconds?)\s*/\s*(\d+\.?\d*)\s*(?:°|º|deg|degrees?)\s*$"
+)
+
+
 def _parse(text: str, where: str) -> pint.Quantity:
     ureg = get_registry()
+    servo = _SERVO_SPEED.match(text)
+    if servo is not None:
+        seconds, degrees = float(servo.group(1)), float(servo.group(2))
+        if seconds > 0.0:
+            return ureg.Quantity(degrees / seconds, "deg/s")
     match = _NUMBER_AND_UNIT.match(text)
     if match is None:
-        raise UnitsError(f"{where}: cannot read {text!r} as a number with a unit (e.g. '3000 rpm', '0.091 N*m/A')")
+        raise UnitsError(
+            f"{where}: cannot read {text!r} as a number with a unit (e.g. '3000 rpm', '0.091 N*m/A')"
+        )
     number, unit_text = match.group(1), match.group(2)
     try:
         magnitude = float(number)
@@ -97,9 +112,10 @@ def _parse(text: str, where: str) -> pint.Quantity:
 def _torque_from_mass_length(q: pint.Quantity, expected: pint.Unit) -> pint.Quantity:
     """Read ``kg*cm``-style torques (mass*length) as kilogram-force*length, as datasheets mean them."""
     ureg = get_registry()
-    if q.dimensionality == ureg.Unit("kg*m").dimensionality and expected.dimensionality == ureg.Unit(
-        "N*m"
-    ).dimensionality:
+    if (
+        q.dimensionality == ureg.Unit("kg*m").dimensionality
+        and expected.dimensionality == ureg.Unit("N*m").dimensionality
+    ):
         return q * ureg.Quantity(1.0, "standard_gravity")
     return q
 
@@ -110,7 +126,7 @@ def _is_energy_for_torque(quantity: pint.Quantity, expected: str) -> bool:
     N*m and J share a dimension, so pint accepts ``"2 J"`` as a torque; on a datasheet that is a
     misread column (energy), never a torque, so it is refused rather than silently accepted.
     """
-    names = dict(quantity.units._units)  # noqa: SLF001 - pint has no public accessor
+    names = dict(quantity.units._units)  # pint has no public accessor for the unit names
     return "N*m" in expected.replace(" ", "") and any(name.endswith("joule") for name in names)
 
 
@@ -141,7 +157,8 @@ def to_si(value: object, expected: str, where: str) -> float:
         quantity = value
     else:
         raise UnitsError(
-            f"{where}: expected a number or a quantity string in {expected}, got {type(value).__name__} {value!r}"
+            f"{where}: expected a number or a quantity string in {expected}, "
+            f"got {type(value).__name__} {value!r}"
         )
     target = ureg.Unit(expected)
     quantity = _torque_from_mass_length(quantity, target)

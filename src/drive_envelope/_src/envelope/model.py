@@ -114,13 +114,21 @@ class PerformanceEnvelope:
             term is dropped when ``G = 0`` and then ``|v| > v_max`` gives 0. 0 means no effort is
             feasible at that speed.
         """
-        speed = np.abs(np.asarray(velocity, dtype=np.float64))
-        limit = self.max_effort - self.velocity_dependent_resistance * speed
+        speed = np.array(velocity, dtype=np.float64)  # a copy, 0-d for a scalar
+        return self._effort_limit_of_speed(np.abs(speed, out=speed))
+
+    def _effort_limit_of_speed(self, speed: FloatArray) -> FloatArray:
+        """:meth:`effort_limit` of ``speed = |velocity|``, reusing ``speed``'s memory (hot path)."""
+        limit = np.multiply(speed, -self.velocity_dependent_resistance, out=np.empty_like(speed))
+        limit += self.max_effort
         if self.speed_effort_gradient > 0.0:
-            limit = np.minimum(limit, (self.max_actuator_velocity - speed) / self.speed_effort_gradient)
-        else:
-            limit = np.where(speed > self.max_actuator_velocity, 0.0, limit)
-        return np.maximum(limit, 0.0)
+            eq2 = np.subtract(self.max_actuator_velocity, speed, out=speed)
+            eq2 *= 1.0 / self.speed_effort_gradient
+            np.minimum(limit, eq2, out=limit)
+        elif math.isfinite(self.max_actuator_velocity):
+            limit[speed > self.max_actuator_velocity] = 0.0
+        np.maximum(limit, 0.0, out=limit)
+        return limit
 
     def velocity_limit(self, effort: ArrayLike) -> FloatArray:
         """Largest |velocity| the envelope allows while the drive exerts ``effort`` (eq. 1 and eq. 2).

@@ -1,0 +1,144 @@
+"""``drive-envelope derive SPEC``: the envelope from a datasheet file or a catalog actuator."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+ORDER = 5
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``derive`` command."""
+    parser = subparsers.add_parser(
+        "derive",
+        help="derive the envelope from motor, gear and controller datasheets",
+        description=(
+            "Derive the four PhysX envelope parameters at the joint from a datasheet file (values in the "
+            "units the datasheets print) or a catalog actuator; every candidate limit is shown and the "
+            "binding one named."
+        ),
+    )
+    parser.add_argument("spec", metavar="FILE|NAME", help="datasheet file (TOML/JSON/YAML) or catalog name")
+    parser.add_argument("--json", action="store_true", help="print one JSON object (SI, joint side)")
+    parser.add_argument(
+        "--format",
+        choices=("toml", "json", "usd-snippet"),
+        help="print (or with --output write) the envelope in this format for the other commands",
+    )
+    parser.add_argument(
+        "--output", metavar="PATH", help="write the envelope here, atomically (format from suffix)"
+    )
+    parser.add_argument(
+        "--duty",
+        choices=("peak", "continuous"),
+        default="peak",
+        help="motor torque rating: max_torque (peak, default) or continuous_torque",
+    )
+    parser.add_argument(
+        "--gradient-method",
+        choices=("auto", "datasheet", "resistance", "nominal"),
+        help="motor speed-torque gradient when the voltage limit binds (default: the file's, else auto)",
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="SECTION.KEY=VALUE",
+        help="override a datasheet value, e.g. --set controller.max_voltage='48 V' (repeatable)",
+    )
+    parser.add_argument(
+        "--approximate-line",
+        action="store_true",
+        help="when a mechanical limit binds, also report the best line through min(mechanical, voltage)",
+    )
+    parser.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
+    from drive_envelope._src.datasheet.derive import derive
+    from drive_envelope._src.datasheet.load import load_datasheet
+    from drive_envelope._src.datasheet.report import derivation_report, envelope_text
+    from drive_envelope._src.io.atomic import atomic_write_text
+
+    if args.json and args.format and not args.output:
+        from drive_envelope.errors import InputError
+
+        raise InputError("--json and --format both print to stdout: add --output PATH for the envelope file")
+    overrides = _overrides(args.set)
+    if Path(args.spec).is_file():
+        sheet = load_datasheet(args.spec, overrides=overrides)
+    else:
+        _check_not_a_path(args.spec)
+        sheet = load_catalog_datasheet(args.spec)
+        if overrides:
+            from drive_envelope._src.datasheet.catalog import catalog_text
+            from drive_envelope._src.datasheet.load import datasheet_from_mapping
+
+            data = _toml(catalog_text(args.spec), sheet.source)
+            sheet = datasheet_from_mapping(data, source=sheet.source, overrides=overrides)
+    derivation = derive(
+        sheet, duty=args.duty, gradient_method=args.gradient_method, approximate_line=args.approximate_line
+    )
+    fmt = args.format or _format_from_suffix(args.output)
+    text = envelope_text(derivation.envelope, fmt)
+    if args.output:
+        atomic_write_text(args.output, text)
+    if args.json:
+        print(json.dumps(derivation.to_dict(), indent=2))
+    elif args.format and not args.output:
+        print(text, end="")
+    else:
+        print(derivation_report(derivation))
+        if args.output:
+            print(f"\nwrote {args.output} ({fmt})")
+    return 0
+
+
+def _overrides(items: list[str]) -> dict[str, object]:
+    """``SECTION.KEY=VALUE`` strings -> mapping; a plain number stays a number (SI)."""
+    from drive_envelope.errors import InputError
+
+    result: dict[str, object] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise InputError(
+                f"--set {item!r}: expected SECTION.KEY=VALUE, e.g. controller.max_voltage='48 V'"
+            )
+        try:
+            result[key.strip()] = float(value)
+        except ValueError:
+            result[key.strip()] = value.strip()
+    return result
+
+
+def _check_not_a_path(spec: str) -> None:
+    from pathlib import Path
+
+    from drive_envelope.errors import InputError
+
+    if Path(spec).suffix.lower() in (".toml", ".json", ".yaml", ".yml") or "/" in spec:
+        raise InputError(f"{spec}: no such file")
+
+
+def _toml(text: str, source: str) -> dict[str, Any]:
+    import tomllib
+
+    from drive_envelope.errors import InputError
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: malformed TOML: {exc}") from None
+
+
+def _format_from_suffix(output: str | None) -> str:
+    if output is None:
+        return "toml"
+    suffix = output.lower().rsplit(".", 1)[-1] if "." in output else ""
+    return {"json": "json", "usda": "usd-snippet", "usd": "usd-snippet"}.get(suffix, "toml")

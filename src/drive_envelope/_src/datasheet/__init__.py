@@ -1,0 +1,1 @@
+"""Datasheet-to-sim: the four envelope parameters from motor, gear and controller datasheets."""

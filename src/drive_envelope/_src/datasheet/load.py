@@ -1,0 +1,368 @@
+"""Reading datasheet files (TOML, JSON or YAML) into a :class:`Datasheet`, with strict validation.
+
+Every quantity is a bare number in the SI unit of its key or a string with units as datasheets
+print them (``"91 mNm/A"``, ``"3000 min^-1"``). Every mistake raises ``InputError`` with one line
+naming the file, the key, the value and what was expected.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from typing import Any
+
+from drive_envelope._src.datasheet.spec import (
+    ControllerSpec,
+    Datasheet,
+    GearboxSpec,
+    LossesSpec,
+    MotorDatasheet,
+    OutputRating,
+    ParamSource,
+    ScrewSpec,
+)
+from drive_envelope._src.envelope.parse import nearest_key
+from drive_envelope._src.io.files import read_mapping
+from drive_envelope._src.units import to_si
+from drive_envelope.errors import InputError
+
+__all__ = [
+    "DATASHEET_SECTIONS",
+    "SECTION_KEYS",
+    "datasheet_from_mapping",
+    "is_datasheet_mapping",
+    "load_datasheet",
+]
+
+DATASHEET_SECTIONS = ("motor", "gear", "controller", "losses", "output", "screw")
+_TOP_KEYS = ("name", "joint", "description", "sources", *DATASHEET_SECTIONS)
+_GRADIENT_METHODS = ("auto", "resistance", "nominal", "datasheet")
+
+# SI unit of each kind of quantity, for rotary motor data, linear motor data and the joint side.
+_ROTARY = {
+    "torque": "N*m",
+    "speed": "rad/s",
+    "torque_constant": "N*m/A",
+    "speed_constant": "rad/s/V",
+    "back_emf_constant": "V*s/rad",
+    "gradient": "rad/s/(N*m)",
+    "resistance_joint": "N*m*s/rad",
+}
+_LINEAR = {
+    "torque": "N",
+    "speed": "m/s",
+    "torque_constant": "N/A",
+    "speed_constant": "m/s/V",
+    "back_emf_constant": "V*s/m",
+    "gradient": "m/s/N",
+    "resistance_joint": "N*s/m",
+}
+_FIXED = {"current": "A", "voltage": "V", "ohm": "ohm", "fraction": "dimensionless", "ratio": "dimensionless"}
+
+# section -> key -> (kind, rule, side). rule: ">0", ">=0" or "(0,1]". side: "motor" (motor units,
+# linear for a linear motor) or "joint" (joint units).
+_Rule = tuple[str, str, str]
+SECTION_KEYS: dict[str, dict[str, _Rule]] = {
+    "motor": {
+        "torque_constant": ("torque_constant", ">0", "motor"),
+        "speed_constant": ("speed_constant", ">0", "motor"),
+        "back_emf_constant": ("back_emf_constant", ">0", "motor"),
+        "terminal_resistance": ("ohm", ">0", "motor"),
+        "max_torque": ("torque", ">0", "motor"),
+        "continuous_torque": ("torque", ">0", "motor"),
+        "max_speed": ("speed", ">0", "motor"),
+        "no_load_speed": ("speed", ">0", "motor"),
+        "nominal_speed": ("speed", ">0", "motor"),
+        "nominal_torque": ("torque", ">0", "motor"),
+        "speed_torque_gradient": ("gradient", ">0", "motor"),
+        "gradient_method": ("enum", "", "motor"),
+    },
+    "gear": {
+        "ratio": ("ratio", ">0", "motor"),
+        "efficiency": ("fraction", "(0,1]", "motor"),
+        "max_torque": ("torque", ">0", "motor"),
+        "max_input_speed": ("speed", ">0", "motor"),
+    },
+    "controller": {
+        "max_current": ("current", ">0", "motor"),
+        "max_voltage": ("voltage", ">0", "motor"),
+        "modulation": ("fraction", "(0,1]", "motor"),
+    },
+    "losses": {
+        "velocity_dependent_resistance": ("resistance_joint", ">=0", "joint"),
+        "operating_points": ("points", "", "motor"),
+    },
+    "output": {
+        "max_effort": ("torque", ">0", "joint"),
+        "max_velocity": ("speed", ">0", "joint"),
+        "velocity_at_max_effort": ("speed", ">=0", "joint"),
+        "speed_effort_gradient": ("gradient", ">0", "joint"),
+        "velocity_dependent_resistance": ("resistance_joint", ">=0", "joint"),
+    },
+    "screw": {
+        "lead": ("lead", ">0", "motor"),
+        "efficiency": ("fraction", "(0,1]", "motor"),
+    },
+}
+_REQUIRED = {"gear": "ratio", "screw": "lead"}
+
+
+def load_datasheet(
+    path: str | os.PathLike[str], *, overrides: Mapping[str, object] | None = None, source: str | None = None
+) -> Datasheet:
+    """Read and validate a datasheet file.
+
+    Args:
+        path: TOML (``.toml``), JSON (``.json``) or YAML (``.yaml``/``.yml``) file.
+        overrides: ``"section.key"`` (or ``"name"``/``"joint"``) -> value, applied on top of the
+            file and recorded with provenance ``"user"``; same rules as values in the file.
+        source: Label for error messages instead of the path (catalog entries use their name).
+
+    Raises:
+        InputError: malformed file, unknown key or section (with the nearest valid one), missing
+            ``name``, a value of the wrong unit or out of range, or contradicting keys.
+    """
+    return datasheet_from_mapping(read_mapping(path), source=source or str(path), overrides=overrides)
+
+
+def is_datasheet_mapping(data: Mapping[str, object]) -> bool:
+    """Whether a file's mapping is a datasheet (it has any datasheet section) rather than an envelope."""
+    return any(section in data for section in DATASHEET_SECTIONS)
+
+
+def datasheet_from_mapping(
+    data: Mapping[str, Any], *, source: str, overrides: Mapping[str, object] | None = None
+) -> Datasheet:
+    """Validate a datasheet mapping (see :func:`load_datasheet`) and convert it to SI."""
+    merged, provenance = _apply_overrides(data, overrides or {}, source)
+    _check_top_level(merged, source)
+    name = merged.get("name")
+    if name is None:
+        raise InputError(f"{source}: missing required key 'name' (the actuator's name)")
+    if not isinstance(name, str) or not name.strip():
+        raise InputError(f"{source}: key 'name': expected a non-empty string, got {name!r}")
+    joint = merged.get("joint", "revolute")
+    if joint not in ("revolute", "prismatic"):
+        raise InputError(f"{source}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
+    if "screw" in merged and joint != "prismatic":
+        raise InputError(
+            f'{source}: section [screw]: a screw needs joint = "prismatic", got joint = {joint!r}'
+        )
+    units = _LINEAR if joint == "prismatic" and "screw" not in merged else _ROTARY
+    joint_units = _LINEAR if joint == "prismatic" else _ROTARY
+    sections = {
+        section: _read_section(merged[section], section, units, joint_units, source)
+        for section in DATASHEET_SECTIONS
+        if section in merged
+    }
+    _check_pairs(sections, source)
+    for section, values in sections.items():
+        for key in values:
+            provenance.setdefault(f"{section}.{key}", "datasheet")
+    return Datasheet(
+        name=name.strip(),
+        joint=joint,
+        motor=MotorDatasheet(**sections["motor"]) if "motor" in sections else None,
+        gear=GearboxSpec(**sections["gear"]) if "gear" in sections else None,
+        controller=ControllerSpec(**sections["controller"]) if "controller" in sections else None,
+        losses=LossesSpec(**sections["losses"]) if "losses" in sections else None,
+        output=OutputRating(**sections["output"]) if "output" in sections else None,
+        screw=ScrewSpec(**sections["screw"]) if "screw" in sections else None,
+        description=_text(merged, "description", source),
+        sources=_sources(merged, source),
+        source=source,
+        provenance=provenance,
+    )
+
+
+def _apply_overrides(
+    data: Mapping[str, Any], overrides: Mapping[str, object], source: str
+) -> tuple[dict[str, Any], dict[str, ParamSource]]:
+    """Copy ``data`` with the ``section.key`` overrides set; return it and the ``user`` provenance."""
+    merged: dict[str, Any] = {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in data.items()}
+    provenance: dict[str, ParamSource] = {}
+    for dotted, value in overrides.items():
+        section, _, key = dotted.partition(".")
+        if not key:
+            if section not in ("name", "joint"):
+                raise InputError(f"override {dotted!r}: expected SECTION.KEY (e.g. controller.max_voltage)")
+            merged[section] = value
+            continue
+        if section not in SECTION_KEYS:
+            hint = nearest_key(section, list(SECTION_KEYS))
+            raise InputError(f"override {dotted!r}: unknown section {section!r}{hint}")
+        if key not in SECTION_KEYS[section]:
+            hint = nearest_key(key, list(SECTION_KEYS[section]))
+            raise InputError(f"override {dotted!r}: unknown key {key!r} in [{section}]{hint}")
+        table = merged.setdefault(section, {})
+        if not isinstance(table, dict):
+            raise InputError(f"{source}: key {section!r}: expected a table [{section}], got {table!r}")
+        table[key] = value
+        provenance[dotted] = "user"
+    return merged, provenance
+
+
+def _check_top_level(data: Mapping[str, Any], source: str) -> None:
+    for key in data:
+        if key in _TOP_KEYS:
+            continue
+        owner = [s for s, keys in SECTION_KEYS.items() if key in keys]
+        hint = f" (it belongs in section [{owner[0]}])" if owner else nearest_key(str(key), _TOP_KEYS)
+        raise InputError(f"{source}: unknown key or section {key!r}{hint}; valid: {', '.join(_TOP_KEYS)}")
+
+
+def _text(data: Mapping[str, Any], key: str, source: str) -> str:
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")
+    return value
+
+
+def _sources(data: Mapping[str, Any], source: str) -> tuple[str, ...]:
+    value = data.get("sources", ())
+    if isinstance(value, str):
+        return (value,)
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+        raise InputError(f"{source}: key 'sources': expected a list of strings (URLs), got {value!r}")
+    return tuple(value)
+
+
+def _read_section(
+    table: object, section: str, units: dict[str, str], joint_units: dict[str, str], source: str
+) -> dict[str, Any]:
+    if not isinstance(table, Mapping):
+        raise InputError(f"{source}: key {section!r}: expected a table [{section}], got {table!r}")
+    spec = SECTION_KEYS[section]
+    for key in table:
+        if key not in spec:
+            raise InputError(
+                f"{source}: unknown key {f'{section}.{key}'!r}{nearest_key(str(key), list(spec))}; "
+                f"valid keys in [{section}]: {', '.join(spec)}"
+            )
+    required = _REQUIRED.get(section)
+    if required is not None and required not in table:
+        raise InputError(f"{source}: section [{section}] needs key {required!r}")
+    values: dict[str, Any] = {}
+    for key, raw in table.items():
+        kind, rule, side = spec[key]
+        where = f"{source}: key {f'{section}.{key}'!r}"
+        if kind == "enum":
+            values[key] = _read_enum(raw, where)
+        elif kind == "points":
+            values[key] = _read_points(raw, units, where)
+        else:
+            values[key] = _read_value(raw, kind, rule, units if side == "motor" else joint_units, where)
+    return values
+
+
+def _unit_of(kind: str, units: dict[str, str]) -> str:
+    return _FIXED.get(kind) or units[kind]
+
+
+def _read_value(raw: object, kind: str, rule: str, units: dict[str, str], where: str) -> float:
+    if kind == "ratio" and isinstance(raw, str) and ":" in raw:
+        value = _read_ratio(raw, where)
+    elif kind == "lead":
+        value = _read_lead(raw, where)
+    else:
+        value = to_si(raw, _unit_of(kind, units), where)
+    _check_rule(value, raw, rule, where)
+    return value
+
+
+def _read_ratio(raw: str, where: str) -> float:
+    """Read a ratio printed as ``"6:1"`` (motor turns : output turns)."""
+    match = re.fullmatch(r"\s*([0-9.]+)\s*:\s*([0-9.]+)\s*", raw)
+    try:
+        if match is None:
+            raise ValueError(raw)
+        return float(match.group(1)) / float(match.group(2))
+    except (ValueError, ZeroDivisionError):
+        raise InputError(
+            f'{where}: cannot read {raw!r} as a gear ratio (write 6, "6:1" or "6 : 1")'
+        ) from None
+
+
+def _read_lead(raw: object, where: str) -> float:
+    """Read a screw lead [m]; ``"5 mm/rev"`` (travel per revolution) and ``"5 mm"`` both work."""
+    if isinstance(raw, str) and re.search(r"/\s*(rev|revolution|turn)s?\s*$", raw):
+        return to_si(raw, "m/turn", where)
+    return to_si(raw, "m", where)
+
+
+def _check_rule(value: float, raw: object, rule: str, where: str) -> None:
+    shown = repr(raw) if isinstance(raw, str) else f"{value:g}"
+    if rule == ">0" and not value > 0.0:
+        raise InputError(f"{where}: expected a value > 0, got {shown}")
+    if rule == ">=0" and not value >= 0.0:
+        raise InputError(f"{where}: expected a value >= 0, got {shown}")
+    if rule == "(0,1]" and not 0.0 < value <= 1.0:
+        raise InputError(f'{where}: expected a fraction in (0, 1] (e.g. 0.9 or "90 %"), got {shown}')
+    if value == float("inf"):
+        raise InputError(f"{where}: expected a finite value, got {shown}")
+
+
+def _read_enum(raw: object, where: str) -> str:
+    if raw not in _GRADIENT_METHODS:
+        hint = nearest_key(str(raw), _GRADIENT_METHODS)
+        raise InputError(f"{where}: expected one of {', '.join(_GRADIENT_METHODS)}, got {raw!r}{hint}")
+    return str(raw)
+
+
+def _read_points(raw: object, units: dict[str, str], where: str) -> tuple[tuple[float, float], ...]:
+    if not isinstance(raw, (list, tuple)):
+        raise InputError(f"{where}: expected a list of [speed, torque] pairs, got {raw!r}")
+    points = []
+    for index, pair in enumerate(raw):
+        if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+            raise InputError(f"{where}: point {index}: expected a [speed, torque] pair, got {pair!r}")
+        speed = to_si(pair[0], units["speed"], f"{where}: point {index} speed")
+        torque = to_si(pair[1], units["torque"], f"{where}: point {index} torque")
+        _check_rule(speed, pair[0], ">=0", f"{where}: point {index} speed")
+        _check_rule(torque, pair[1], ">=0", f"{where}: point {index} torque")
+        points.append((speed, torque))
+    return tuple(points)
+
+
+def _check_pairs(sections: Mapping[str, dict[str, Any]], source: str) -> None:
+    """Refuse keys that say the same thing twice, and inconsistent pairs."""
+    motor, output = sections.get("motor", {}), sections.get("output", {})
+    if "speed_constant" in motor and "back_emf_constant" in motor:
+        raise InputError(
+            f"{source}: keys 'motor.speed_constant' and 'motor.back_emf_constant' both given; "
+            "they say the same thing (k_v = 1/k_e): keep one"
+        )
+    if "velocity_at_max_effort" in output and "speed_effort_gradient" in output:
+        raise InputError(
+            f"{source}: keys 'output.velocity_at_max_effort' and 'output.speed_effort_gradient' both given; "
+            "they say the same thing: keep one"
+        )
+    if (
+        "velocity_dependent_resistance" in sections.get("losses", {})
+        and "velocity_dependent_resistance" in output
+    ):
+        raise InputError(
+            f"{source}: 'velocity_dependent_resistance' given in both [losses] and [output]: keep one"
+        )
+    if "velocity_at_max_effort" in output:
+        if "max_effort" not in output or "max_velocity" not in output:
+            raise InputError(
+                f"{source}: key 'output.velocity_at_max_effort' needs "
+                "'output.max_effort' and 'output.max_velocity'"
+            )
+        if output["velocity_at_max_effort"] > output["max_velocity"]:
+            raise InputError(
+                f"{source}: key 'output.velocity_at_max_effort': "
+                f"{output['velocity_at_max_effort']:g} exceeds "
+                f"'output.max_velocity' {output['max_velocity']:g} (SI)"
+            )
+    if (
+        "no_load_speed" in motor
+        and "nominal_speed" in motor
+        and not motor["no_load_speed"] > motor["nominal_speed"]
+    ):
+        raise InputError(
+            f"{source}: key 'motor.no_load_speed': {motor['no_load_speed']:g} must exceed "
+            f"'motor.nominal_speed' {motor['nominal_speed']:g} (SI)"
+        )

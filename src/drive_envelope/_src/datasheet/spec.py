@@ -1,0 +1,226 @@
+"""What a datasheet file says: motor, gear, controller, losses, output rating and screw, in SI.
+
+Motor side and joint side are kept apart by type. :class:`MotorDatasheet` holds motor-side values
+(before the gear), :class:`OutputRating` and direct ``velocity_dependent_resistance`` values hold
+joint-side values, and :class:`Transmission` is the only place where one becomes the other.
+
+Every field is an SI float or ``None`` when the datasheet does not give it. ``None`` is never
+guessed: a candidate limit whose inputs are absent is reported as missing. Defaults (gear efficiency
+1.0, controller modulation 0.9) are applied by :func:`~drive_envelope._src.datasheet.derive.derive`,
+which records them as such.
+
+Units depend on the motor: a rotary motor uses N*m, rad/s, N*m/A, rad/s/V; a linear motor (a
+prismatic joint without ``[screw]``) uses N, m/s, N/A, (m/s)/V. The brackets below give both.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Literal
+
+from drive_envelope._src.envelope.model import JointType
+
+__all__ = [
+    "ControllerSpec",
+    "Datasheet",
+    "GearboxSpec",
+    "GradientMethod",
+    "LossesSpec",
+    "MotorDatasheet",
+    "OutputRating",
+    "ParamSource",
+    "ScrewSpec",
+    "Transmission",
+]
+
+GradientMethod = Literal["auto", "resistance", "nominal", "datasheet"]
+"""How the motor's speed-torque gradient is formed when the voltage limit binds."""
+
+ParamSource = Literal["datasheet", "derived", "default", "user"]
+"""Where a value came from: the datasheet file, a formula, a documented default, or the user
+(a command-line override)."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class MotorDatasheet:
+    """The motor, motor side (before the gear), as its datasheet prints it."""
+
+    torque_constant: float | None = None
+    """k_t [N*m/A or N/A]; taken as printed (no rms/peak or phase conversion)."""
+    speed_constant: float | None = None
+    """k_v [(rad/s)/V or (m/s)/V]."""
+    back_emf_constant: float | None = None
+    """k_e [V*s/rad or V*s/m]; gives k_v = 1/k_e. Exclusive with ``speed_constant``."""
+    terminal_resistance: float | None = None
+    """R_mot, terminal (phase-to-phase) resistance [ohm]."""
+    max_torque: float | None = None
+    """tau_M,max for peak duty [N*m or N]."""
+    continuous_torque: float | None = None
+    """tau_M,max for continuous duty [N*m or N]."""
+    max_speed: float | None = None
+    """n_M,max, mechanical speed limit [rad/s or m/s]."""
+    no_load_speed: float | None = None
+    """n_0 [rad/s or m/s]."""
+    nominal_speed: float | None = None
+    """n_N [rad/s or m/s]; below ``no_load_speed``."""
+    nominal_torque: float | None = None
+    """tau_N [N*m or N]."""
+    speed_torque_gradient: float | None = None
+    """Speed-torque gradient as printed [(rad/s)/(N*m) or (m/s)/N]."""
+    gradient_method: GradientMethod = "auto"
+    """Which motor gradient to use: ``auto`` takes the first of datasheet, resistance, nominal whose
+    inputs exist."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class GearboxSpec:
+    """The gear between motor and joint (or screw)."""
+
+    ratio: float
+    """i_G = motor speed / gear output speed [1]; > 1 for a reducer."""
+    efficiency: float | None = None
+    """eta_G in (0, 1] [1]; ``None``: 1.0 is used, with a note."""
+    max_torque: float | None = None
+    """tau_G,max at the gear output [N*m or N]."""
+    max_input_speed: float | None = None
+    """n_G,in,max at the gear input [rad/s or m/s]."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ControllerSpec:
+    """The motor controller (drive electronics)."""
+
+    max_current: float | None = None
+    """I_C,max [A]."""
+    max_voltage: float | None = None
+    """V_max, supply voltage [V]."""
+    modulation: float | None = None
+    """mu_C in (0, 1] [1]; ``None``: 0.9 is used, with a note."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class LossesSpec:
+    """Speed-dependent losses."""
+
+    velocity_dependent_resistance: float | None = None
+    """k_tau_v at the joint, when known directly [N*m*s/rad or N*s/m]."""
+    operating_points: tuple[tuple[float, float], ...] | None = None
+    """Motor-side ``(speed [rad/s or m/s], max torque [N*m or N])`` points from an operating
+    diagram, or None; fitted by least squares when no direct value is given."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class OutputRating:
+    """Ratings of the whole actuator at its output (joint side), not scaled by the gear."""
+
+    max_effort: float | None = None
+    """Stall or peak output effort [N*m or N]."""
+    max_velocity: float | None = None
+    """No-load output velocity [rad/s or m/s]."""
+    velocity_at_max_effort: float | None = None
+    """Output velocity at ``max_effort`` [rad/s or m/s]; gives the gradient
+    ``(max_velocity - velocity_at_max_effort) / max_effort``."""
+    speed_effort_gradient: float | None = None
+    """Output speed-effort gradient [(rad/s)/(N*m) or (m/s)/N]."""
+    velocity_dependent_resistance: float | None = None
+    """k_tau_v at the output [N*m*s/rad or N*s/m]."""
+
+    def gradient(self) -> float | None:
+        """The output gradient [(rad/s)/(N*m) or (m/s)/N], or None when the rating has none."""
+        if self.speed_effort_gradient is not None:
+            return self.speed_effort_gradient
+        if self.velocity_at_max_effort is not None and self.max_velocity is not None and self.max_effort:
+            return (self.max_velocity - self.velocity_at_max_effort) / self.max_effort
+        return None
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ScrewSpec:
+    """A lead screw or ball screw turning the gear output into linear travel (prismatic joints)."""
+
+    lead: float
+    """Travel per revolution [m]."""
+    efficiency: float | None = None
+    """eta_S in (0, 1] [1]; ``None``: 1.0."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Datasheet:
+    """A whole actuator datasheet, SI, as read from a datasheet file."""
+
+    name: str
+    """Actuator name."""
+    joint: JointType = "revolute"
+    """``"revolute"`` or ``"prismatic"``; fixes the joint-side units."""
+    motor: MotorDatasheet | None = None
+    """``[motor]``, or None when absent."""
+    gear: GearboxSpec | None = None
+    """``[gear]``, or None: direct drive (ratio 1, efficiency 1)."""
+    controller: ControllerSpec | None = None
+    """``[controller]``, or None."""
+    losses: LossesSpec | None = None
+    """``[losses]``, or None."""
+    output: OutputRating | None = None
+    """``[output]``, or None."""
+    screw: ScrewSpec | None = None
+    """``[screw]`` (prismatic joints only), or None."""
+    description: str = ""
+    """Free text (catalog entries describe the actuator here)."""
+    sources: tuple[str, ...] = ()
+    """Document URLs the numbers come from (catalog entries)."""
+    source: str = "datasheet"
+    """File (or catalog name) it was read from; starts every error message."""
+    provenance: Mapping[str, ParamSource] = field(default_factory=dict)
+    """``"section.key"`` -> ``"datasheet"`` or ``"user"`` (set with an override) for each value given."""
+
+    @property
+    def linear_motor(self) -> bool:
+        """Whether motor and gear data are linear (N, m/s): a prismatic joint without a screw."""
+        return self.joint == "prismatic" and self.screw is None
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Transmission:
+    """Motor side -> joint side: the gear ratio is defined here, once, with every reflection rule.
+
+    ``i_G = motor speed / gear output speed`` (> 1 for a reducer). A screw of lead ``L`` (travel per
+    revolution) adds ``T = 2*pi / L`` [rad/m] between gear output and joint. With gear efficiency
+    ``eta_G`` and screw efficiency ``eta_S`` (``T = eta_S = 1`` without a screw):
+
+    * effort: motor effort ``x i_G * eta_G * T * eta_S``; gear output effort ``x T * eta_S``;
+    * speed: motor (or gear input) speed ``/ (i_G * T)``;
+    * speed-effort gradient: ``/ (i_G**2 * T**2)``; efficiency does not enter (the spec's rule);
+    * velocity-dependent resistance: ``x i_G**2 * eta_G * T**2 * eta_S``.
+
+    Joint-side values (``[output]``, a direct resistance) are never converted.
+    """
+
+    ratio: float = 1.0
+    """i_G [1]."""
+    efficiency: float = 1.0
+    """eta_G [1]."""
+    screw_factor: float = 1.0
+    """T = 2*pi/lead [rad/m], 1.0 without a screw."""
+    screw_efficiency: float = 1.0
+    """eta_S [1]."""
+
+    def motor_effort(self, effort: float) -> float:
+        """Joint effort [N*m or N] of a motor effort [N*m or N]."""
+        return effort * self.ratio * self.efficiency * self.screw_factor * self.screw_efficiency
+
+    def gear_output_effort(self, effort: float) -> float:
+        """Joint effort [N*m or N] of a gear output effort [N*m or N]."""
+        return effort * self.screw_factor * self.screw_efficiency
+
+    def motor_speed(self, speed: float) -> float:
+        """Joint speed [rad/s or m/s] of a motor (or gear input) speed [rad/s or m/s]."""
+        return speed / (self.ratio * self.screw_factor)
+
+    def motor_gradient(self, gradient: float) -> float:
+        """Joint speed-effort gradient of a motor gradient [(rad/s)/(N*m) or (m/s)/N]."""
+        return gradient / (self.ratio * self.screw_factor) ** 2
+
+    def motor_resistance(self, resistance: float) -> float:
+        """Joint velocity-dependent resistance of a motor-side one [N*m*s/rad or N*s/m]."""
+        return resistance * (self.ratio * self.screw_factor) ** 2 * self.efficiency * self.screw_efficiency

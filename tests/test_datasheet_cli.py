@@ -1,0 +1,284 @@
+"""`drive-envelope derive` and `catalog` through the CLI: output, bad input (exit 2, one line), files."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from drive_envelope._src.cli.main import main
+
+AK80 = """\
+name = "T-Motor AK80-6"
+joint = "revolute"
+
+[motor]
+torque_constant = "0.091 N*m/A"
+speed_constant = "100 rpm/V"
+terminal_resistance = "170 mohm"
+
+[gear]
+ratio = 6.0
+efficiency = 0.92
+
+[controller]
+max_current = "24 A"
+max_voltage = "24 V"
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "sheet.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_derive_json_matches_the_spec_example(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Print the spec's JSON object for the reduced AK80-6 example."""
+    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["max_effort"] == pytest.approx(12.05568)
+    assert data["max_actuator_velocity"] == pytest.approx(37.69911184307751)
+    assert data["speed_effort_gradient"] == pytest.approx(0.5702478229950758)
+    assert data["max_effort_limited_by"] == "controller_current"
+    assert data["max_actuator_velocity_limited_by"] == "voltage"
+    assert data["speed_effort_gradient_method"] == "resistance"
+
+
+def test_derive_report_marks_the_binding_limit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Print a table per parameter with formulas, inputs and the binding limit starred."""
+    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)))
+    assert code == 0
+    assert "limited by controller_current" in out
+    assert "I_C,max * k_t * i_G * eta_G" in out
+    star_lines = [line for line in out.splitlines() if line.strip().startswith("*")]
+    assert any("controller_current" in line for line in star_lines)
+    assert any("voltage" in line for line in star_lines)
+    assert "method resistance" in out and "notes:" in out
+
+
+def test_round_trip_derive_envelope_show(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Write the envelope with --format toml --output and read it back with `envelope show`."""
+    out_file = tmp_path / "env.toml"
+    code, out, _ = run(
+        capsys, "derive", str(write(tmp_path, AK80)), "--format", "toml", "--output", str(out_file)
+    )
+    assert code == 0 and out_file.exists() and "wrote" in out
+    code, shown, _ = run(capsys, "envelope", "show", str(out_file), "--json")
+    assert code == 0
+    data = json.loads(shown)
+    assert data["max_effort"] == 12.05568 or data["max_effort"] == pytest.approx(12.05568, rel=1e-15)
+    assert data["max_actuator_velocity"] == pytest.approx(12 * math.pi, rel=1e-15)
+    assert data["speed_effort_gradient"] == pytest.approx(0.17 / 0.091**2 / 36, rel=1e-14)
+    assert data["name"] == "T-Motor AK80-6"
+
+
+def test_json_format_to_stdout_is_an_envelope_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Print an envelope file (not the derivation) with --format json and no --output."""
+    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--format", "json")
+    assert code == 0
+    data = json.loads(out)
+    assert set(data) == {
+        "name",
+        "joint",
+        "max_effort",
+        "max_actuator_velocity",
+        "velocity_dependent_resistance",
+        "speed_effort_gradient",
+    }
+
+
+def test_usd_snippet_in_degrees(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Write angular values in degrees as USD stores them."""
+    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--format", "usd-snippet")
+    assert code == 0
+    assert "PhysxDrivePerformanceEnvelopeAPI:angular" in out
+    line = next(x for x in out.splitlines() if "maxActuatorVelocity" in x)
+    assert float(line.split("=")[1].split("#")[0]) == pytest.approx(360 * 6.0)  # 360 rpm = 2160 deg/s
+
+
+@pytest.mark.usd
+def test_usd_snippet_parses_as_usda(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Produce a layer that USD reads, with the attributes on the prim."""
+    sdf = pytest.importorskip("pxr.Sdf")
+    out_file = tmp_path / "env.usda"
+    code, _, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--output", str(out_file))
+    assert code == 0
+    layer = sdf.Layer.FindOrOpen(str(out_file))
+    prim = layer.GetPrimAtPath("/Joint")
+    value = prim.attributes["physxDrivePerformanceEnvelope:angular:speedEffortGradient"].default
+    assert value == pytest.approx(0.17 / 0.091**2 / 36 * 180 / math.pi, rel=1e-6)
+
+
+def test_duty_and_gradient_method_flags(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Honour --duty continuous and --gradient-method."""
+    text = AK80.replace(
+        "[gear]",
+        'max_torque = "2.5 N*m"\ncontinuous_torque = "0.5 N*m"\n'
+        'no_load_speed = "2400 rpm"\nnominal_speed = "2000 rpm"\nnominal_torque = "0.5 N*m"\n\n[gear]',
+    )
+    path = write(tmp_path, text)
+    _, out, _ = run(
+        capsys, "derive", str(path), "--json", "--duty", "continuous", "--gradient-method", "nominal"
+    )
+    data = json.loads(out)
+    assert data["max_effort_limited_by"] == "motor_torque"
+    assert data["max_effort"] == pytest.approx(0.5 * 6 * 0.92)
+    assert data["speed_effort_gradient_method"] == "nominal"
+    assert data["provenance"]["motor.gradient_method"] == "user"
+
+
+def test_set_override_is_user_provenance(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Override a datasheet value with --set and record it as user input."""
+    _, out, _ = run(
+        capsys, "derive", str(write(tmp_path, AK80)), "--json", "--set", "controller.max_voltage=48 V"
+    )
+    data = json.loads(out)
+    assert data["max_actuator_velocity"] == pytest.approx(24 * math.pi)
+    assert data["provenance"]["controller.max_voltage"] == "user"
+
+
+def test_catalog_name_with_override(capsys: pytest.CaptureFixture[str]) -> None:
+    """Accept --set on a catalog actuator too."""
+    code, out, _ = run(capsys, "derive", "tmotor-ak80-6", "--json", "--set", "controller.max_voltage=12 V")
+    assert code == 0
+    assert json.loads(out)["provenance"]["controller.max_voltage"] == "user"
+
+
+def test_approximate_line_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Add the line fit to the JSON when asked and a mechanical limit binds."""
+    text = AK80.replace("[gear]", 'max_speed = "2100 rpm"\n\n[gear]')
+    _, out, _ = run(capsys, "derive", str(write(tmp_path, text)), "--json", "--approximate-line")
+    data = json.loads(out)
+    assert data["speed_effort_gradient"] == 0.0 and data["speed_effort_gradient_method"] == "mechanical"
+    assert data["line_fit"]["speed_effort_gradient"] > 0.0
+
+
+# -- bad input: exit 2, one line naming file, key and reason, no traceback, nothing written ------------
+
+BAD_CASES = [
+    ("malformed", 'name = "x"\n[motor\n', "malformed TOML"),
+    ("unknown key", AK80.replace("torque_constant", "torque_constnat"), "did you mean 'torque_constant'"),
+    ("unknown section", AK80.replace("[controller]", "[controler]"), "did you mean 'controller'"),
+    ("key at top level", 'name = "x"\ntorque_constant = 1.0\n', "belongs in section [motor]"),
+    ("ratio 0", AK80.replace("ratio = 6.0", "ratio = 0"), "'gear.ratio': expected a value > 0, got 0"),
+    ("negative resistance", AK80.replace('"170 mohm"', '"-170 mohm"'), "'motor.terminal_resistance'"),
+    ("efficiency > 1", AK80.replace("efficiency = 0.92", "efficiency = 1.2"), "fraction in (0, 1]"),
+    ("efficiency percent", AK80.replace("efficiency = 0.92", 'efficiency = "120 %"'), "'gear.efficiency'"),
+    ("missing name", AK80.replace('name = "T-Motor AK80-6"\n', ""), "missing required key 'name'"),
+    ("torque in rpm", AK80.replace('"0.091 N*m/A"', '"3000 rpm"'),
+     "'motor.torque_constant': '3000 rpm' has dimension"),
+    ("unknown unit", AK80.replace('"24 A"', '"24 blorps"'), "unknown unit 'blorps'"),
+    ("not a number", AK80.replace("ratio = 6.0", "ratio = [6]"), "'gear.ratio'"),
+    ("bad enum", AK80.replace("[gear]", 'gradient_method = "resistence"\n\n[gear]'),
+     "did you mean 'resistance'"),
+    ("bad joint", AK80.replace('"revolute"', '"rotary"'), "key 'joint'"),
+    ("both kv and ke", AK80.replace("[gear]", 'back_emf_constant = "10 V/krpm"\n\n[gear]'),
+     "say the same thing"),
+    ("screw on revolute", AK80 + '\n[screw]\nlead = "5 mm"\n', "a screw needs joint"),
+    ("gear without ratio", AK80.replace("ratio = 6.0\n", ""), "section [gear] needs key 'ratio'"),
+    ("no-load below nominal",
+     AK80.replace("[gear]", 'no_load_speed = "1000 rpm"\nnominal_speed = "2000 rpm"\n\n[gear]'),
+     "'motor.no_load_speed'"),
+    ("explicit method missing", AK80.replace("[gear]", 'gradient_method = "datasheet"\n\n[gear]'),
+     "gradient method 'datasheet'"),
+    ("no velocity candidate", AK80.replace('max_voltage = "24 V"', ""),
+     "no candidate limit for max_actuator_velocity"),
+    ("velocity_at_max_effort too big",
+     AK80 + '\n[output]\nmax_effort = 1.0\nmax_velocity = 1.0\nvelocity_at_max_effort = 2.0\n', "exceeds"),
+    ("k_tau_v twice",
+     AK80 + "\n[losses]\nvelocity_dependent_resistance = 0.1\n"
+     "[output]\nvelocity_dependent_resistance = 0.1\n",
+     "both [losses] and [output]"),
+    ("one operating point", AK80 + '\n[losses]\noperating_points = [["1000 rpm", "0.2 N*m"]]\n',
+     "distinct speeds"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("label", "text", "expected"), BAD_CASES, ids=[c[0] for c in BAD_CASES])
+def test_bad_input_exits_2_with_one_line(
+    label: str, text: str, expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Exit 2 with one line naming the file and the reason; write nothing."""
+    path = write(tmp_path, text)
+    out_file = tmp_path / "out.toml"
+    code, out, err = run(capsys, "derive", str(path), "--output", str(out_file))
+    assert code == 2, label
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"drive-envelope: error: {path}: ")
+    assert expected in lines[0]
+    assert "Traceback" not in err
+    assert not out_file.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["sheet.toml"]  # no temporary file left behind
+
+
+def test_missing_file_and_unknown_catalog_name(capsys: pytest.CaptureFixture[str]) -> None:
+    """Refuse a missing file and an unknown catalog name (suggesting the nearest) with exit 2."""
+    code, _, err = run(capsys, "derive", "nowhere/sheet.toml")
+    assert code == 2 and "no such file" in err
+    code, _, err = run(capsys, "derive", "tmotor-ak80")
+    assert code == 2 and "did you mean 'tmotor-ak80-6'" in err
+
+
+def test_bad_set_override(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Refuse a malformed or unknown --set with exit 2."""
+    path = str(write(tmp_path, AK80))
+    assert run(capsys, "derive", path, "--set", "controller.max_voltag=12")[0] == 2
+    assert run(capsys, "derive", path, "--set", "novalue")[0] == 2
+
+
+# -- catalog ---------------------------------------------------------------------------------------------
+
+
+def test_catalog_lists_and_shows(capsys: pytest.CaptureFixture[str]) -> None:
+    """List every catalog actuator and print one datasheet with its sources."""
+    code, out, _ = run(capsys, "catalog")
+    assert code == 0 and "tmotor-ak80-6" in out and "actuonix-l16-63-6-r" in out
+    code, out, _ = run(capsys, "catalog", "--json")
+    assert len(json.loads(out)) >= 8
+    code, out, _ = run(capsys, "catalog", "tmotor-ak80-6")
+    assert code == 0 and "https://" in out and "[motor]" in out
+
+
+def test_derive_by_catalog_name(capsys: pytest.CaptureFixture[str]) -> None:
+    """Derive a catalog actuator by its key or by its name."""
+    code, out, _ = run(capsys, "derive", "tmotor-ak80-6", "--json")
+    assert code == 0
+    by_key = json.loads(out)
+    code, out, _ = run(capsys, "derive", "T-Motor AK80-6", "--json")
+    assert code == 0 and json.loads(out)["max_effort"] == by_key["max_effort"]
+
+
+def test_json_and_yaml_datasheets(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Accept the same keys in JSON and (when PyYAML is installed) YAML files."""
+    import tomllib
+
+    data = tomllib.loads(AK80)
+    json_file = tmp_path / "sheet.json"
+    json_file.write_text(json.dumps(data), encoding="utf-8")
+    code, out, _ = run(capsys, "derive", str(json_file), "--json")
+    assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(12.05568)
+    yaml = pytest.importorskip("yaml")
+    yaml_file = tmp_path / "sheet.yaml"
+    yaml_file.write_text(yaml.safe_dump(data), encoding="utf-8")
+    code, out, _ = run(capsys, "derive", str(yaml_file), "--json")
+    assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(12.05568)
+
+
+def test_json_with_format_needs_output(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Refuse --json with --format and no --output (both would go to stdout)."""
+    code, _, err = run(capsys, "derive", str(write(tmp_path, AK80)), "--json", "--format", "toml")
+    assert code == 2 and "--output" in err
