@@ -18,8 +18,15 @@ $(STAMP): pyproject.toml Makefile
 
 setup: $(STAMP)
 
+# the main job: datasheet -> envelope -> simulated actuator -> plot (files in build/demo/)
 demo: setup
-	$(BIN)/drive-envelope envelope show examples/envelopes/demo.toml
+	mkdir -p build/demo
+	$(BIN)/drive-envelope derive tmotor-ak80-6 --format toml --output build/demo/tmotor-ak80-6.toml
+	$(BIN)/drive-envelope derive tmotor-ak80-6
+	$(BIN)/drive-envelope envelope show build/demo/tmotor-ak80-6.toml
+	$(BIN)/drive-envelope simulate examples/scenarios/actuator_swing.toml --engine reference --output build/demo/actuator_swing.csv
+	$(BIN)/drive-envelope plot examples/scenarios/actuator_swing.toml --trajectory build/demo/actuator_swing.csv --output build/demo/actuator_swing.png
+	@echo "demo outputs: build/demo/ (envelope file, trajectory CSV, plot PNG)"
 
 lint: setup
 	$(BIN)/ruff check src tests benchmarks examples

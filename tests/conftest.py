@@ -11,7 +11,7 @@ _MARKER_MODULES = {
     "warp": "warp",
     "newton": "newton",
     "torch": "torch",
-    "usd": "pxr",
+    "usd": "physx_usd_schemas",
     "physx": "ovphysx",
     "plot": "matplotlib",
 }

@@ -96,3 +96,24 @@ def test_missing_file_exits_2() -> None:
     result = _run("envelope", "show", "nope.toml")
     assert result.returncode == 2
     assert result.stderr.strip() == "drive-envelope: error: nope.toml: no such file"
+
+
+def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> None:
+    """Give new files the umask mode, keep a replaced file's mode, and refuse a missing folder."""
+    import os
+    import stat
+
+    from drive_envelope import InputError
+    from drive_envelope.io import atomic_write_text
+
+    fresh = tmp_path / "new.txt"
+    atomic_write_text(fresh, "a")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o666 & ~mask
+    fresh.chmod(0o640)
+    atomic_write_text(fresh, "b")
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o640
+    assert fresh.read_text() == "b"
+    with pytest.raises(InputError, match="does not exist"):
+        atomic_write_text(tmp_path / "missing" / "x.txt", "c")

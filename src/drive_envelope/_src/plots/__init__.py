@@ -1,0 +1,1 @@
+"""Envelope plots: curve data (NumPy) and the matplotlib figure (imported lazily)."""

@@ -1,0 +1,294 @@
+"""Drawing an envelope (and trajectories over it) with matplotlib, imported lazily.
+
+:func:`plot_envelope` draws an :class:`~drive_envelope._src.plots.curve.EnvelopeCurve` and returns
+an :class:`EnvelopePlot` handle (``.figure``, ``.axes``, ``.lines``); :func:`save_figure` writes it
+atomically. Figures are built with ``matplotlib.figure.Figure`` (Agg canvas), never pyplot, so no
+GUI backend or global figure state is touched.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.io.atomic import atomic_path
+from drive_envelope._src.plots.curve import EnvelopeCurve, envelope_curve
+from drive_envelope._src.teststand.trajectory import Trajectory
+from drive_envelope.errors import InputError
+
+__all__ = ["FIGURE_SUFFIXES", "EnvelopePlot", "plot_envelope", "save_figure"]
+
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+"""File types :func:`save_figure` writes."""
+
+_REGION_COLOUR = "#9ecae1"
+_LINE_COLOURS = {"eq1": "#d62728", "eq2": "#1f77b4"}
+_MARKERS = ("o", "s", "^", "D", "v", "P")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class EnvelopePlot:
+    """Handle of a drawn envelope plot."""
+
+    figure: Any
+    """The ``matplotlib.figure.Figure``."""
+    axes: tuple[Any, ...]
+    """``(plane,)`` or ``(plane, time, time_effort)``: the (velocity, effort) axes, then the time
+    panel's velocity axes and its twin effort axes."""
+    lines: dict[str, list[Any]] = field(default_factory=dict)
+    """Artists by role: ``region``, ``eq1``, ``eq2``, ``corners``, ``points:<name>``,
+    ``highlight``, ``velocity:<name>``, ``effort:<name>``, ``limit``."""
+    curve: EnvelopeCurve | None = None
+    """The curve data drawn."""
+
+
+def _matplotlib() -> Any:
+    try:
+        import matplotlib
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise InputError("plotting needs matplotlib: pip install 'drive-envelope[plot]'") from None
+    del matplotlib
+    return Figure
+
+
+def _as_list(trajectory: Trajectory | Sequence[Trajectory] | None) -> list[Trajectory]:
+    if trajectory is None:
+        return []
+    if isinstance(trajectory, Trajectory):
+        return [trajectory]
+    return list(trajectory)
+
+
+def _window(
+    curve_or_envelope: EnvelopeCurve | PerformanceEnvelope, trajectories: list[Trajectory]
+) -> EnvelopeCurve:
+    """Curve data with a window that also holds every operating point."""
+    if isinstance(curve_or_envelope, EnvelopeCurve):
+        return curve_or_envelope
+    env = curve_or_envelope
+    v_ext = e_ext = None
+    if trajectories:
+        speeds = [float(np.max(np.abs(t.velocity), initial=0.0)) for t in trajectories]
+        efforts = [float(np.max(np.abs(t.effort), initial=0.0)) for t in trajectories]
+        base = envelope_curve(env)
+        v_ext = max(base.velocity_extent, 1.15 * max(speeds))
+        e_ext = max(base.effort_extent, 1.15 * max(efforts))
+    return envelope_curve(env, velocity_extent=v_ext, effort_extent=e_ext)
+
+
+def plot_envelope(
+    curve_or_envelope: EnvelopeCurve | PerformanceEnvelope,
+    *,
+    trajectory: Trajectory | Sequence[Trajectory] | None = None,
+    ax: Any = None,
+    highlight: npt.ArrayLike | None = None,
+    title: str | None = None,
+) -> EnvelopePlot:
+    """Draw the envelope's feasible region and, optionally, trajectories over it.
+
+    Args:
+        curve_or_envelope: Curve data from :func:`envelope_curve`, or an envelope (its window then
+            grows to hold every operating point).
+        trajectory: One or more trajectories; their ``(velocity, effort)`` points are drawn coloured
+            by time, and, when ``ax`` is None, a second panel shows velocity and effort against time.
+        ax: A matplotlib axes to draw the (velocity, effort) plane into; None creates a figure.
+        highlight: Boolean mask over the points of the (first) trajectory; True points are marked
+            in red (e.g. samples that violate the envelope).
+        title: Figure title; default the envelope's name.
+
+    Returns:
+        The :class:`EnvelopePlot` handle.
+
+    Raises:
+        InputError: matplotlib is missing, or ``highlight`` does not match the trajectory.
+    """
+    figure_cls = _matplotlib()
+    trajectories = _as_list(trajectory)
+    curve = _window(curve_or_envelope, trajectories)
+    if ax is None:
+        figure = figure_cls(figsize=(12.0, 6.2) if trajectories else (7.0, 6.4), layout="constrained")
+        grid = figure.add_gridspec(1, 2, width_ratios=(1.15, 1.0)) if trajectories else None
+        plane = figure.add_subplot(grid[0, 0] if grid is not None else 111)
+    else:
+        figure, plane, grid = ax.figure, ax, None
+    lines: dict[str, list[Any]] = {}
+    _draw_region(plane, curve, lines)
+    colour_map = None
+    for index, traj in enumerate(trajectories):
+        colour_map = _draw_points(plane, traj, index, lines)
+    if highlight is not None:
+        _draw_highlight(plane, trajectories, highlight, lines)
+    if colour_map is not None:
+        figure.colorbar(colour_map, ax=plane, label="time [s]", pad=0.01, fraction=0.04, aspect=30)
+    # below the axes: inside it would hide operating points in the lower quadrants
+    plane.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), fontsize=7, framealpha=0.9, ncols=1)
+    axes: tuple[Any, ...] = (plane,)
+    if grid is not None:
+        axes = (plane, *_draw_time_panel(figure.add_subplot(grid[0, 1]), curve, trajectories, lines))
+    name = title if title is not None else curve.envelope.name
+    if name and ax is None:
+        figure.suptitle(name)
+    return EnvelopePlot(figure=figure, axes=axes, lines=lines, curve=curve)
+
+
+def _draw_region(plane: Any, curve: EnvelopeCurve, lines: dict[str, list[Any]]) -> None:
+    polygon = curve.boundary
+    lines["region"] = plane.fill(
+        polygon[:, 0], polygon[:, 1], color=_REGION_COLOUR, alpha=0.45, label="feasible region"
+    )
+    closed = np.vstack([polygon, polygon[:1]])
+    lines["region"] += plane.plot(closed[:, 0], closed[:, 1], color="#08519c", linewidth=1.6)
+    for line in curve.lines:
+        artists = []
+        for quadrant, segment in enumerate(line.segments):
+            artists += plane.plot(
+                segment[:, 0],
+                segment[:, 1],
+                linestyle="--",
+                linewidth=1.0,
+                color=_LINE_COLOURS.get(line.name, "k"),
+                label=line.label if quadrant == 0 else None,
+            )
+        lines[line.name] = artists
+    lines["corners"] = []
+    for point in curve.corners:
+        lines["corners"] += plane.plot([point.velocity], [point.effort], "ko", markersize=4)
+        where = f"({point.velocity:.4g} {curve.velocity_unit}, {point.effort:.4g} {curve.effort_unit})"
+        text = f"{point.name}\n{where}"
+        # the label goes toward the inside of the region so the window never clips it
+        right = point.velocity > 0.5 * curve.velocity_extent or point.velocity == 0.0  # stall: to the left
+        high = point.effort > 0.5 * curve.effort_extent
+        lines["corners"].append(
+            plane.annotate(
+                text,
+                (point.velocity, point.effort),
+                textcoords="offset points",
+                xytext=(-6 if right else 6, -6 if high else 6),
+                ha="right" if right else "left",
+                va="top" if high else "bottom",
+                fontsize=7,
+            )
+        )
+    for x, y, text in (
+        (0.75, 0.75, "driving"),
+        (0.25, 0.75, "braking"),
+        (0.25, 0.25, "driving"),
+        (0.75, 0.25, "braking"),
+    ):
+        plane.text(x, y, text, transform=plane.transAxes, fontsize=11, color="0.55", alpha=0.6,
+                   ha="center", va="center", zorder=0)  # fmt: skip
+    plane.axhline(0.0, color="0.6", linewidth=0.6)
+    plane.axvline(0.0, color="0.6", linewidth=0.6)
+    plane.set_xlim(-curve.velocity_extent, curve.velocity_extent)
+    plane.set_ylim(-curve.effort_extent, curve.effort_extent)
+    plane.set_xlabel(f"joint velocity [{curve.velocity_unit}]")
+    plane.set_ylabel(f"actuator effort [{curve.effort_unit}]")
+    plane.grid(True, linewidth=0.3, alpha=0.5)
+
+
+def _draw_points(plane: Any, traj: Trajectory, index: int, lines: dict[str, list[Any]]) -> Any:
+    label = traj.name or f"trajectory {index + 1}"
+    points = plane.scatter(
+        traj.velocity,
+        traj.effort,
+        c=traj.time,
+        cmap="viridis",
+        s=12,
+        marker=_MARKERS[index % len(_MARKERS)],
+        linewidths=0.0,
+        label=f"{label} ({traj.engine})" if traj.engine else label,
+        zorder=3,
+    )
+    lines[f"points:{label}"] = [points]
+    return points
+
+
+def _draw_highlight(
+    plane: Any, trajectories: list[Trajectory], highlight: npt.ArrayLike, lines: dict[str, list[Any]]
+) -> None:
+    mask = np.asarray(highlight, dtype=bool)
+    if not trajectories:
+        raise InputError("highlight needs a trajectory to mark")
+    first = trajectories[0]
+    if mask.shape != (len(first),):
+        raise InputError(f"highlight must be a boolean mask of shape ({len(first)},), got shape {mask.shape}")
+    lines["highlight"] = plane.plot(
+        first.velocity[mask],
+        first.effort[mask],
+        "x",
+        color="red",
+        markersize=6,
+        label="outside envelope",
+        zorder=4,
+    )
+
+
+def _draw_time_panel(
+    axis: Any, curve: EnvelopeCurve, trajectories: list[Trajectory], lines: dict[str, list[Any]]
+) -> tuple[Any, Any]:
+    twin = axis.twinx()
+    for index, traj in enumerate(trajectories):
+        label = traj.name or f"trajectory {index + 1}"
+        style = ("-", "--", ":", "-.")[index % 4]
+        lines[f"velocity:{label}"] = axis.plot(
+            traj.time, traj.velocity, style, color="#1f77b4", label=f"velocity {label}"
+        )
+        lines[f"effort:{label}"] = twin.plot(
+            traj.time, traj.effort, style, color="#d62728", label=f"effort {label}"
+        )
+    first = trajectories[0]
+    limit = curve.envelope.effort_limit(first.velocity)
+    lines["limit"] = twin.plot(
+        first.time, limit, color="#d62728", linewidth=0.6, alpha=0.5, label="effort limit at v(t)"
+    )
+    lines["limit"] += twin.plot(first.time, -limit, color="#d62728", linewidth=0.6, alpha=0.5)
+    axis.set_xlabel("time [s]")
+    axis.set_ylabel(f"velocity [{curve.velocity_unit}]", color="#1f77b4")
+    twin.set_ylabel(f"effort [{curve.effort_unit}]", color="#d62728")
+    axis.grid(True, linewidth=0.3, alpha=0.5)
+    handles = axis.get_legend_handles_labels()
+    twin_handles = twin.get_legend_handles_labels()
+    axis.legend(handles[0] + twin_handles[0], handles[1] + twin_handles[1], loc="lower right", fontsize=7)
+    return axis, twin
+
+
+def save_figure(plot: EnvelopePlot | Any, path: str | os.PathLike[str], *, dpi: int = 120) -> None:
+    """Write the figure of ``plot`` (or a matplotlib figure) to ``path`` atomically.
+
+    Args:
+        plot: An :class:`EnvelopePlot` or a ``matplotlib.figure.Figure``.
+        path: Output file; its suffix picks the format (``.png``, ``.svg``, ``.pdf``).
+        dpi: Resolution of raster output [dots per inch].
+
+    Raises:
+        InputError: an unsupported suffix, a non-positive ``dpi``, or a file that cannot be written.
+    """
+    target = Path(path)
+    suffix = target.suffix.lower()
+    if suffix not in FIGURE_SUFFIXES:
+        raise InputError(f"--output {str(target)!r}: expected a .png, .svg or .pdf file name")
+    if dpi <= 0:
+        raise InputError(f"--dpi: expected a positive integer, got {dpi!r}")
+    figure = plot.figure if isinstance(plot, EnvelopePlot) else plot
+    try:
+        with atomic_path(target) as tmp:
+            figure.savefig(tmp, format=suffix[1:], dpi=dpi, metadata=_metadata(suffix))
+    except OSError as exc:  # a missing folder or no permission is the user's input, not a bug
+        raise InputError(f"--output {str(target)!r}: cannot write: {exc.strerror or exc}") from None
+
+
+def _metadata(suffix: str) -> dict[str, Any]:
+    # fixed metadata keeps SVG/PDF output reproducible (no creation date)
+    if suffix == ".svg":
+        return {"Date": None}
+    if suffix == ".pdf":
+        return {"CreationDate": None}
+    return {}

@@ -1,0 +1,1 @@
+"""The test stand: one actuated joint simulated with PhysX's drive and envelope semantics."""

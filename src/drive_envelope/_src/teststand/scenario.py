@@ -1,0 +1,507 @@
+"""Test-stand scenario files: one actuated joint (one DOF, fixed base) driving a rigid inertia.
+
+A scenario file (TOML, JSON or YAML) has the sections ``[joint]``, ``[drive]``, ``[envelope]``
+(optional), ``[load]`` and ``[simulation]``; quantities are bare SI numbers or strings with units.
+``load_scenario`` reads it, applies ``--set section.key=value`` overrides and validates every value;
+every mistake raises one :class:`~drive_envelope.errors.InputError` line naming the file (or
+``--set``), the key, the value and what was expected.
+
+Envelope precedence: ``[envelope] datasheet = ...`` (a datasheet file, envelope file or catalog
+name) gives the base envelope; explicit ``[envelope]`` keys beside it replace its values, and
+``[drive] max_effort`` replaces its ``max_effort`` (PhysX's ``maxEffort`` is the drive's maxForce:
+one number). Without ``[envelope]`` the drive is clamped to ``+-max_effort`` (PhysX's plain drive).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from drive_envelope._src.envelope.drive import DriveType
+from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
+from drive_envelope._src.envelope.parse import nearest_key, read_quantity
+from drive_envelope._src.io.files import read_mapping
+from drive_envelope._src.units import to_si
+from drive_envelope.errors import InputError
+
+__all__ = [
+    "DriveSpec",
+    "JointSpec",
+    "LoadSpec",
+    "Scenario",
+    "SimulationSpec",
+    "SolverType",
+    "apply_overrides",
+    "load_scenario",
+    "parse_override",
+    "scenario_from_mapping",
+]
+
+SolverType = Literal["pgs", "tgs"]
+
+_SECTIONS = ("joint", "drive", "envelope", "load", "simulation")
+_TOP_KEYS = ("name", "description", *_SECTIONS)
+_ENVELOPE_KEYS = (
+    "datasheet",
+    "max_actuator_velocity",
+    "velocity_dependent_resistance",
+    "speed_effort_gradient",
+)
+_MAX_ITERATIONS = 255  # PhysX stores solver iteration counts in 8 bits
+
+
+def _unit(joint: str, revolute: str, prismatic: str) -> str:
+    return revolute if joint == "revolute" else prismatic
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class JointSpec:
+    """The joint and the rigid inertia it moves (fixed base, one DOF)."""
+
+    type: JointType = "revolute"
+    """``"revolute"`` (angles in rad, efforts in N*m) or ``"prismatic"`` (m, N)."""
+    inertia: float
+    """Moment of inertia about the axis [kg*m^2] (revolute) or mass [kg] (prismatic); ``> 0``."""
+    initial_position: float = 0.0
+    """Joint position at t = 0 [rad or m]."""
+    initial_velocity: float = 0.0
+    """Joint velocity at t = 0 [rad/s or m/s]."""
+
+    def __post_init__(self) -> None:
+        if self.type not in ("revolute", "prismatic"):
+            raise InputError(f"joint.type must be 'revolute' or 'prismatic', got {self.type!r}")
+        _check_finite("joint.inertia", self.inertia, positive=True)
+        _check_finite("joint.initial_position", self.initial_position)
+        _check_finite("joint.initial_velocity", self.initial_velocity)
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class DriveSpec:
+    """A PhysX articulation drive (implicit spring-damper) on the joint."""
+
+    type: DriveType = "force"
+    """``"force"`` (gains act on the joint effort) or ``"acceleration"`` (gains scaled by inertia)."""
+    stiffness: float = 0.0
+    """Spring gain [N*m/rad or N/m] (force drive) or [1/s^2] (acceleration drive); ``>= 0``."""
+    damping: float = 0.0
+    """Damper gain [N*m*s/rad or N*s/m] (force drive) or [1/s] (acceleration drive); ``>= 0``."""
+    target_position: float = 0.0
+    """Drive target position [rad or m]."""
+    target_velocity: float = 0.0
+    """Drive target velocity [rad/s or m/s]."""
+    max_effort: float = math.inf
+    """PhysX ``maxForce``, the envelope's ``maxEffort`` [N*m or N]; ``>= 0``. ``inf`` (omitted)
+    means unlimited, 0 turns the drive off."""
+
+    def __post_init__(self) -> None:
+        if self.type not in ("force", "acceleration"):
+            raise InputError(f"drive.type must be 'force' or 'acceleration', got {self.type!r}")
+        _check_finite("drive.stiffness", self.stiffness, nonnegative=True)
+        _check_finite("drive.damping", self.damping, nonnegative=True)
+        _check_finite("drive.target_position", self.target_position)
+        _check_finite("drive.target_velocity", self.target_velocity)
+        if math.isnan(self.max_effort) or self.max_effort < 0.0:
+            raise InputError(f"drive.max_effort must be >= 0, got {self.max_effort!r}")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class LoadSpec:
+    """Constant efforts on the joint besides the drive."""
+
+    external_effort: float = 0.0
+    """Generalized force from outside the actuator (gravity, a brake, a spring) [N*m or N]; it is
+    not actuator effort and the envelope does not limit it."""
+    applied_effort: float = 0.0
+    """Joint effort commanded beside the drive (PhysX joint force) [N*m or N]; it counts as
+    actuator effort: drive + applied stay inside the envelope together."""
+
+    def __post_init__(self) -> None:
+        _check_finite("load.external_effort", self.external_effort)
+        _check_finite("load.applied_effort", self.applied_effort)
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class SimulationSpec:
+    """Time stepping and the PhysX articulation solver settings."""
+
+    dt: float = 1.0 / 60.0
+    """Time step [s]; ``> 0``."""
+    duration: float = 1.0
+    """Simulated time [s]; ``>= 0``. The number of steps is ``round(duration / dt)``."""
+    solver: SolverType = "tgs"
+    """``"tgs"`` (PhysX's default through USD) or ``"pgs"``."""
+    position_iterations: int = 4
+    """Solver position iterations (TGS: substeps), 1..255."""
+    velocity_iterations: int = 1
+    """Solver velocity iterations, 0..255."""
+
+    def __post_init__(self) -> None:
+        _check_finite("simulation.dt", self.dt, positive=True)
+        _check_finite("simulation.duration", self.duration, nonnegative=True)
+        if self.solver not in ("pgs", "tgs"):
+            raise InputError(f"simulation.solver must be 'pgs' or 'tgs', got {self.solver!r}")
+        _check_int("simulation.position_iterations", self.position_iterations, 1)
+        _check_int("simulation.velocity_iterations", self.velocity_iterations, 0)
+
+    @property
+    def steps(self) -> int:
+        """Number of time steps, ``round(duration / dt)``."""
+        return round(self.duration / self.dt)
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Scenario:
+    """A whole test-stand scenario: joint, drive, optional envelope, load and solver settings."""
+
+    joint: JointSpec
+    """The joint and its inertia."""
+    drive: DriveSpec = field(default_factory=DriveSpec)
+    """The PhysX drive."""
+    envelope: PerformanceEnvelope | None = None
+    """The performance envelope; None gives PhysX's plain drive (``+-drive.max_effort`` on
+    drive + applied effort). Its ``max_effort`` must equal ``drive.max_effort``."""
+    load: LoadSpec = field(default_factory=LoadSpec)
+    """Constant external and applied efforts."""
+    simulation: SimulationSpec = field(default_factory=SimulationSpec)
+    """Time step, duration and solver."""
+    name: str = ""
+    """Label for outputs (defaults to the file's stem)."""
+    description: str = ""
+    """Free text from the file."""
+
+    def __post_init__(self) -> None:
+        if self.envelope is None:
+            return
+        if self.envelope.joint != self.joint.type:
+            raise InputError(
+                f"envelope is for a {self.envelope.joint} joint but joint.type is {self.joint.type!r}"
+            )
+        if self.envelope.max_effort != self.drive.max_effort:
+            raise InputError(
+                f"envelope.max_effort ({self.envelope.max_effort!r}) must equal drive.max_effort "
+                f"({self.drive.max_effort!r}): PhysX uses the drive's maxForce as maxEffort"
+            )
+
+    def effective_envelope(self) -> PerformanceEnvelope | None:
+        """The envelope PhysX applies to drive + applied effort.
+
+        Returns:
+            The given envelope; for a plain drive with a finite ``max_effort`` the envelope
+            ``(max_effort, inf, 0, 0)``; None when the drive is unlimited.
+        """
+        if self.envelope is not None:
+            return self.envelope
+        if math.isinf(self.drive.max_effort):
+            return None
+        return PerformanceEnvelope(max_effort=self.drive.max_effort, joint=self.joint.type)
+
+
+# -- validation helpers -----------------------------------------------------------------------------
+
+
+def _check_finite(name: str, value: float, *, positive: bool = False, nonnegative: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(f"{name} must be a finite number, got {value!r}")
+    if positive and not value > 0.0:
+        raise InputError(f"{name} must be > 0, got {value!r}")
+    if nonnegative and value < 0.0:
+        raise InputError(f"{name} must be >= 0, got {value!r}")
+
+
+def _check_int(name: str, value: int, low: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= _MAX_ITERATIONS:
+        raise InputError(f"{name} must be an integer in {low}..{_MAX_ITERATIONS}, got {value!r}")
+
+
+# -- overrides --------------------------------------------------------------------------------------
+
+
+def parse_override(text: str) -> tuple[str, str, object]:
+    """Split one ``--set section.key=value`` into ``(section, key, value)``.
+
+    The value is read as a TOML literal (``12``, ``1.5``, ``"pgs"``, ``true``); anything else is
+    kept as a plain string, so ``--set drive.target_velocity="30 rpm"`` and
+    ``--set simulation.solver=pgs`` both work.
+
+    Raises:
+        InputError: no ``=``, or a key that is not ``section.key``.
+    """
+    import tomllib
+
+    path, sep, raw = text.partition("=")
+    section, dot, key = path.strip().partition(".")
+    if not sep or not dot or not section or not key or "." in key:
+        raise InputError(f"--set {text!r}: expected section.key=value, e.g. drive.target_velocity=12")
+    raw = raw.strip()
+    try:
+        value: object = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return section, key, value
+
+
+def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
+    """Return a copy of the raw scenario mapping with ``--set section.key=value`` overrides applied.
+
+    Raises:
+        InputError: a malformed override or an unknown section (the key is checked later, with the
+            rest of the file).
+    """
+    result = copy.deepcopy(dict(data))
+    for text in overrides:
+        section, key, value = parse_override(text)
+        if section not in _SECTIONS:
+            raise InputError(
+                f"--set {text!r}: unknown section {section!r}{nearest_key(section, _SECTIONS)}; "
+                f"valid sections: {', '.join(_SECTIONS)}"
+            )
+        table = result.setdefault(section, {})
+        if not isinstance(table, dict):
+            raise InputError(f"--set {text!r}: [{section}] is not a table in the scenario file")
+        table[key] = value
+    return result
+
+
+# -- reading ----------------------------------------------------------------------------------------
+
+
+def load_scenario(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> Scenario:
+    """Read a scenario file (TOML, JSON or YAML) and apply ``--set section.key=value`` overrides.
+
+    Args:
+        path: The scenario file.
+        overrides: ``section.key=value`` strings, applied in order after reading the file.
+
+    Returns:
+        The validated :class:`Scenario` (SI floats, joint side).
+
+    Raises:
+        InputError: one line naming the file, the key, the value and what was expected.
+    """
+    file = Path(path)
+    data = apply_overrides(read_mapping(file), overrides)
+    return scenario_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+
+
+def scenario_from_mapping(
+    data: Mapping[str, Any],
+    *,
+    source: str = "scenario",
+    base_dir: str | os.PathLike[str] | None = None,
+    default_name: str = "",
+) -> Scenario:
+    """Build a :class:`Scenario` from a raw mapping (the parsed file).
+
+    Args:
+        data: Sections ``joint`` (required), ``drive``, ``envelope``, ``load``, ``simulation``.
+        source: File name used in error messages.
+        base_dir: Directory against which a relative ``envelope.datasheet`` path is resolved.
+        default_name: Scenario name when the mapping has no ``name``.
+
+    Raises:
+        InputError: one line naming ``source``, the key, the value and what was expected.
+    """
+    _check_keys(data, _TOP_KEYS, source, "")
+    if "joint" not in data:
+        raise InputError(f"{source}: missing required table [joint] (type, inertia)")
+    sections = {name: _table(data, name, source) for name in _SECTIONS}
+    try:
+        joint = _read_joint(sections["joint"], source)
+        drive = _read_drive(sections["drive"], joint.type, source)
+        envelope, drive = _read_envelope(sections["envelope"], drive, joint.type, source, base_dir)
+        load = _read_load(sections["load"], joint.type, source)
+        simulation = _read_simulation(sections["simulation"], source)
+        name = _read_text(data, "name", source) or default_name
+        description = _read_text(data, "description", source)
+        return Scenario(
+            joint=joint,
+            drive=drive,
+            envelope=envelope,
+            load=load,
+            simulation=simulation,
+            name=name,
+            description=description,
+        )
+    except InputError as exc:
+        message = str(exc)
+        raise InputError(message if message.startswith(f"{source}:") else f"{source}: {message}") from None
+
+
+def _table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
+    table = data.get(name, {})
+    if not isinstance(table, Mapping):
+        raise InputError(f"{source}: key {name!r}: expected a table [{name}], got {table!r}")
+    return dict(table)
+
+
+def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], source: str, section: str) -> None:
+    prefix = f"{section}." if section else ""
+    for key in table:
+        if key not in valid:
+            raise InputError(
+                f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), valid)}; "
+                f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
+            )
+
+
+def _read_text(data: Mapping[str, Any], key: str, source: str) -> str:
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")
+    return value
+
+
+def _choice(table: Mapping[str, Any], section: str, key: str, choices: tuple[str, ...], source: str) -> str:
+    value = table.get(key, choices[0])
+    if value not in choices:
+        raise InputError(
+            f"{source}: key '{section}.{key}': expected one of {', '.join(map(repr, choices))}, got {value!r}"
+        )
+    return str(value)
+
+
+def _quantities(
+    table: Mapping[str, Any], section: str, units: Mapping[str, str], source: str
+) -> dict[str, float]:
+    """Read every key of ``units`` present in ``table`` as an SI float (strings may carry units)."""
+    values = {}
+    for key, unit in units.items():
+        if key in table:
+            where = f"{source}: key '{section}.{key}'"
+            value = read_quantity(table[key], unit, where)
+            if math.isnan(value):
+                raise InputError(f"{where}: expected a number in {unit}, got {table[key]!r}")
+            values[key] = value
+    return values
+
+
+def _read_joint(table: Mapping[str, Any], source: str) -> JointSpec:
+    _check_keys(table, ("type", "inertia", "initial_position", "initial_velocity"), source, "joint")
+    joint = _choice(table, "joint", "type", ("revolute", "prismatic"), source)
+    if "inertia" not in table:
+        raise InputError(
+            f"{source}: missing required key 'joint.inertia' ({_unit(joint, 'kg*m^2', 'kg')}, > 0)"
+        )
+    units = {
+        "inertia": _unit(joint, "kg*m**2", "kg"),
+        "initial_position": _unit(joint, "rad", "m"),
+        "initial_velocity": _unit(joint, "rad/s", "m/s"),
+    }
+    return JointSpec(type=joint, **_quantities(table, "joint", units, source))  # type: ignore[arg-type]
+
+
+def _read_drive(table: Mapping[str, Any], joint: str, source: str) -> DriveSpec:
+    keys = ("type", "stiffness", "damping", "target_position", "target_velocity", "max_effort")
+    _check_keys(table, keys, source, "drive")
+    drive_type = _choice(table, "drive", "type", ("force", "acceleration"), source)
+    if drive_type == "force":
+        gains = {"stiffness": _unit(joint, "N*m/rad", "N/m"), "damping": _unit(joint, "N*m*s/rad", "N*s/m")}
+    else:
+        gains = {"stiffness": "1/s**2", "damping": "1/s"}
+    units = {
+        **gains,
+        "target_position": _unit(joint, "rad", "m"),
+        "target_velocity": _unit(joint, "rad/s", "m/s"),
+        "max_effort": _unit(joint, "N*m", "N"),
+    }
+    return DriveSpec(type=drive_type, **_quantities(table, "drive", units, source))  # type: ignore[arg-type]
+
+
+def _read_envelope(
+    table: Mapping[str, Any],
+    drive: DriveSpec,
+    joint: str,
+    source: str,
+    base_dir: str | os.PathLike[str] | None,
+) -> tuple[PerformanceEnvelope | None, DriveSpec]:
+    """The envelope (or None) and the drive with ``max_effort`` made consistent with it."""
+    if not table:
+        return None, drive
+    _check_keys(table, _ENVELOPE_KEYS, source, "envelope")
+    units = {
+        "max_actuator_velocity": _unit(joint, "rad/s", "m/s"),
+        "velocity_dependent_resistance": _unit(joint, "N*m*s/rad", "N*s/m"),
+        "speed_effort_gradient": _unit(joint, "(rad/s)/(N*m)", "(m/s)/N"),
+    }
+    values: dict[str, Any] = _quantities(table, "envelope", units, source)
+    if "datasheet" in table:
+        base = _resolve_datasheet(table["datasheet"], source, base_dir)
+        if base.joint != joint:
+            raise InputError(
+                f"{source}: key 'envelope.datasheet': {table['datasheet']!r} describes a {base.joint} "
+                f"actuator but joint.type is {joint!r}"
+            )
+        merged = {**base.to_dict(), **values}
+        if math.isfinite(drive.max_effort):
+            merged["max_effort"] = drive.max_effort  # [drive] max_effort replaces the datasheet's
+        envelope = PerformanceEnvelope(**merged)
+    else:
+        if math.isinf(drive.max_effort):
+            raise InputError(
+                f"{source}: key 'drive.max_effort': an [envelope] needs a finite max_effort "
+                f"({_unit(joint, 'N*m', 'N')}), the envelope's maxEffort"
+            )
+        envelope = PerformanceEnvelope(max_effort=drive.max_effort, joint=joint, **values)  # type: ignore[arg-type]
+    if envelope.max_effort != drive.max_effort:
+        drive = _replace_max_effort(drive, envelope.max_effort)
+    return envelope, drive
+
+
+def _replace_max_effort(drive: DriveSpec, max_effort: float) -> DriveSpec:
+    import dataclasses
+
+    return dataclasses.replace(drive, max_effort=max_effort)
+
+
+def _resolve_datasheet(
+    spec: object, source: str, base_dir: str | os.PathLike[str] | None
+) -> PerformanceEnvelope:
+    """Envelope of ``envelope.datasheet``: a file (relative to the scenario) or a catalog name."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise InputError(
+            f"{source}: key 'envelope.datasheet': expected a file name or catalog name, got {spec!r}"
+        )
+    candidate = Path(base_dir) / spec if base_dir is not None else Path(spec)
+    target = str(candidate) if candidate.is_file() else spec
+    try:
+        from drive_envelope._src.datasheet.resolve import resolve_envelope
+    except ImportError:
+        raise InputError(
+            f"{source}: key 'envelope.datasheet': datasheet support is not available in this build"
+        ) from None
+    try:
+        return resolve_envelope(target)
+    except InputError as exc:
+        raise InputError(f"{source}: key 'envelope.datasheet': {exc}") from None
+
+
+def _read_load(table: Mapping[str, Any], joint: str, source: str) -> LoadSpec:
+    _check_keys(table, ("external_effort", "applied_effort"), source, "load")
+    unit = _unit(joint, "N*m", "N")
+    return LoadSpec(**_quantities(table, "load", {"external_effort": unit, "applied_effort": unit}, source))
+
+
+def _read_simulation(table: Mapping[str, Any], source: str) -> SimulationSpec:
+    keys = ("dt", "duration", "solver", "position_iterations", "velocity_iterations")
+    _check_keys(table, keys, source, "simulation")
+    solver = _choice(table, "simulation", "solver", ("tgs", "pgs"), source)
+    times = {
+        key: to_si(table[key], "s", f"{source}: key 'simulation.{key}'")
+        for key in ("dt", "duration")
+        if key in table
+    }
+    counts = {}
+    for key in ("position_iterations", "velocity_iterations"):
+        if key in table:
+            value = table[key]
+            if isinstance(value, float) and value.is_integer():
+                value = int(value)
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise InputError(f"{source}: key 'simulation.{key}': expected an integer, got {value!r}")
+            counts[key] = value
+    return SimulationSpec(solver=solver, **times, **counts)  # type: ignore[arg-type]

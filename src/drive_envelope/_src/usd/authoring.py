@@ -1,0 +1,437 @@
+"""Write and read PhysxDrivePerformanceEnvelopeAPI on USD joints, with PhysX's unit conventions.
+
+What PhysX 5.6 reads (``omni.physx`` ``usdLoad/Joint.cpp``):
+
+* ``PhysicsDriveAPI:<inst>`` with ``drive:<inst>:physics:maxForce``: the envelope's maxEffort;
+* ``PhysxDrivePerformanceEnvelopeAPI:<inst>`` beside it, with
+  ``physxDrivePerformanceEnvelope:<inst>:{maxActuatorVelocity, velocityDependentResistance,
+  speedEffortGradient}``; unauthored values fall back to the schema defaults (inf, 0, 0);
+* instances: ``angular`` on revolute joints, ``linear`` on prismatic joints, ``rotX|rotY|rotZ`` on
+  D6 (generic) joints; PhysX does not read the envelope on D6 ``transX|Y|Z`` axes;
+* angular instances store degrees (deg/s, N*m*s/deg, (deg/s)/(N*m)); every effort is in stage units
+  (``metersPerUnit``, ``kilogramsPerUnit``), see :mod:`drive_envelope._src.usd.scale`;
+* only joints inside an articulation (a body under ``PhysicsArticulationRootAPI``) keep it.
+
+USD stores these attributes as 32-bit floats: a written value reads back to within float32
+rounding (relative 6e-8), not bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
+from drive_envelope._src.usd.scale import ANGULAR_INSTANCES, LINEAR_INSTANCES, StageUnits, is_angular
+from drive_envelope.errors import InputError
+
+if TYPE_CHECKING:
+    from pxr import Usd
+
+__all__ = [
+    "ENVELOPE_API",
+    "DriveRecord",
+    "EnvelopeAuthoringWarning",
+    "joint_kind",
+    "list_drives",
+    "read_envelope",
+    "resolve_joint",
+    "stage_units",
+    "write_envelope",
+]
+
+ENVELOPE_API = "PhysxDrivePerformanceEnvelopeAPI"
+"""Schema name of the multiple-apply envelope API."""
+_DRIVE_API = "PhysicsDriveAPI"
+_ATTRIBUTES = {
+    "max_actuator_velocity": "maxActuatorVelocity",
+    "velocity_dependent_resistance": "velocityDependentResistance",
+    "speed_effort_gradient": "speedEffortGradient",
+}
+_D6_INSTANCES = ("rotX", "rotY", "rotZ", "transX", "transY", "transZ")
+_FLT_MAX = 3.4028234663852886e38
+# a drive whose gains saturate maxForce within this error (one degree, one degree per second) was
+# most likely written with per-radian gains into USD's per-degree attributes
+_SUSPICIOUS_ERROR_DEG = 1.0
+
+
+class EnvelopeAuthoringWarning(UserWarning):
+    """A USD edit that PhysX will accept but that probably does not do what was meant."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class DriveRecord:
+    """One drive instance of one joint, with its values converted to SI."""
+
+    joint_path: str
+    """Prim path of the joint."""
+    joint_kind: str
+    """``"revolute"``, ``"prismatic"`` or ``"d6"``."""
+    instance: str
+    """Drive instance: ``angular``, ``linear``, ``rotX`` ... ``transZ``."""
+    in_articulation: bool
+    """Whether PhysX simulates the joint as an articulation joint (only those honour the envelope)."""
+    max_effort: float
+    """The drive's maxForce [N*m or N]; ``inf`` when unlimited."""
+    stiffness: float
+    """Drive stiffness [N*m/rad or N/m] (force drives; acceleration drives: [1/s^2])."""
+    damping: float
+    """Drive damping [N*m*s/rad or N*s/m] (force drives; acceleration drives: [1/s])."""
+    envelope: PerformanceEnvelope | None
+    """The envelope PhysX reads, or None when PhysxDrivePerformanceEnvelopeAPI is not applied
+    (PhysX then uses ``(maxForce, inf, 0, 0)``) or maxForce is unlimited."""
+
+
+# -- stage helpers ------------------------------------------------------------------------------------
+
+
+def stage_units(stage: Usd.Stage) -> StageUnits:
+    """The stage's ``metersPerUnit`` and ``kilogramsPerUnit`` (USD fallbacks 0.01 and 1)."""
+    from pxr import UsdGeom, UsdPhysics
+
+    return StageUnits(
+        meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
+        kilograms_per_unit=float(UsdPhysics.GetStageKilogramsPerUnit(stage)),
+    )
+
+
+def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
+    """The joint prim named by ``joint_path`` (absolute, or relative to a given prim).
+
+    Args:
+        prim_or_stage: A ``Usd.Stage`` or a ``Usd.Prim``; with a prim and no ``joint_path`` the prim
+            itself is the joint.
+        joint_path: Prim path of the joint, or None.
+
+    Raises:
+        InputError: no such prim, or the prim is not a UsdPhysics joint.
+    """
+    from drive_envelope._src.usd.apply import register_schemas
+
+    register_schemas()  # idempotent; the schema registry must know PhysxDrivePerformanceEnvelopeAPI
+    from pxr import Sdf, Usd, UsdPhysics
+
+    if isinstance(prim_or_stage, Usd.Stage):
+        stage, base = prim_or_stage, Sdf.Path.absoluteRootPath
+    elif isinstance(prim_or_stage, Usd.Prim) and prim_or_stage.IsValid():
+        stage, base = prim_or_stage.GetStage(), prim_or_stage.GetPath()
+    else:
+        raise InputError(f"expected a Usd.Stage or a valid Usd.Prim, got {type(prim_or_stage).__name__}")
+    if joint_path is None:
+        if base == Sdf.Path.absoluteRootPath:
+            raise InputError("joint_path is required when a stage is given")
+        path = base
+    else:
+        if not Sdf.Path.IsValidPathString(joint_path):
+            raise InputError(f"joint path {joint_path!r}: not a valid USD prim path")
+        path = Sdf.Path(joint_path).MakeAbsolutePath(base)
+    prim = stage.GetPrimAtPath(path)
+    if not prim.IsValid():
+        raise InputError(f"joint path {str(path)!r}: no such prim in {_stage_name(stage)}")
+    if not prim.IsA(UsdPhysics.Joint):
+        raise InputError(
+            f"joint path {str(path)!r}: prim of type {prim.GetTypeName()!r} is not a UsdPhysics joint"
+        )
+    return prim
+
+
+def _stage_name(stage: Usd.Stage) -> str:
+    identifier = str(stage.GetRootLayer().identifier)
+    return identifier if identifier else "the stage"
+
+
+def joint_kind(prim: Usd.Prim) -> str:
+    """``"revolute"``, ``"prismatic"`` or ``"d6"`` (a generic ``PhysicsJoint``).
+
+    Raises:
+        InputError: another joint type (fixed, spherical, distance), which has no envelope.
+    """
+    from pxr import UsdPhysics
+
+    if prim.IsA(UsdPhysics.RevoluteJoint):
+        return "revolute"
+    if prim.IsA(UsdPhysics.PrismaticJoint):
+        return "prismatic"
+    if prim.GetTypeName() == "PhysicsJoint":
+        return "d6"
+    raise InputError(
+        f"joint {str(prim.GetPath())!r}: a {prim.GetTypeName()} has no drive envelope "
+        "(only revolute, prismatic and D6 joints do)"
+    )
+
+
+def _choose_instance(prim: Usd.Prim, kind: str, instance: str | None) -> str:
+    """The drive instance to use: given, or implied by the joint type."""
+    where = f"joint {str(prim.GetPath())!r}"
+    allowed = {"revolute": ("angular",), "prismatic": ("linear",), "d6": _D6_INSTANCES}[kind]
+    if instance is None:
+        if kind == "d6":
+            raise InputError(f"{where}: a D6 joint needs an instance, one of {', '.join(_D6_INSTANCES)}")
+        return allowed[0]
+    if instance not in allowed:
+        raise InputError(
+            f"{where}: instance {instance!r} is not valid on a {kind} joint; expected {' or '.join(allowed)}"
+        )
+    return instance
+
+
+def in_articulation(prim: Usd.Prim) -> bool:
+    """Whether a joint is an articulation joint (only those keep the envelope in PhysX).
+
+    True when a body of the joint (or the joint) sits under a PhysicsArticulationRootAPI prim and
+    the joint is not excluded from the articulation.
+    """
+    from pxr import UsdPhysics
+
+    joint = UsdPhysics.Joint(prim)
+    excluded = joint.GetExcludeFromArticulationAttr().Get()
+    if excluded:
+        return False
+    stage = prim.GetStage()
+    candidates = [prim]
+    for rel in (joint.GetBody0Rel(), joint.GetBody1Rel()):
+        candidates += [stage.GetPrimAtPath(target) for target in rel.GetTargets()]
+    for candidate in candidates:
+        node = candidate
+        while node.IsValid() and not node.IsPseudoRoot():
+            if node.HasAPI(UsdPhysics.ArticulationRootAPI):
+                return True
+            node = node.GetParent()
+    return False
+
+
+# -- writing ------------------------------------------------------------------------------------------
+
+
+def write_envelope(
+    prim_or_stage: Any,
+    joint_path: str | None,
+    envelope: PerformanceEnvelope,
+    instance: str | None = None,
+) -> str:
+    """Author ``envelope`` on a joint's drive the way PhysX reads it.
+
+    Applies ``PhysicsDriveAPI:<inst>`` (if absent) and ``PhysxDrivePerformanceEnvelopeAPI:<inst>``,
+    sets ``drive:<inst>:physics:maxForce`` to ``max_effort`` and the three envelope attributes,
+    converting radians to degrees on angular instances and SI to the stage's units. Edits go to the
+    stage's current edit target. Suspicious situations are reported with
+    :class:`EnvelopeAuthoringWarning`: a joint outside any articulation (PhysX strips its envelope),
+    an existing maxForce that differs from ``max_effort``, stiffness or damping that look like
+    per-radian values on an angular drive, and an envelope on a D6 translational axis.
+
+    Args:
+        prim_or_stage: A ``Usd.Stage``, or a ``Usd.Prim`` (the joint itself when ``joint_path`` is
+            None, else the base of a relative ``joint_path``).
+        joint_path: Prim path of the joint, or None.
+        envelope: The envelope (joint side, SI); its ``joint`` type must match the instance.
+        instance: Drive instance; default from the joint type (revolute -> ``angular``,
+            prismatic -> ``linear``); D6 joints need one of ``rotX|rotY|rotZ|transX|transY|transZ``.
+
+    Returns:
+        The drive instance written.
+
+    Raises:
+        InputError: no such joint, a joint type without envelope, an instance that does not fit the
+            joint, or an envelope for the other joint type.
+    """
+    from pxr import Sdf, UsdPhysics
+
+    prim = resolve_joint(prim_or_stage, joint_path)
+    kind = joint_kind(prim)
+    inst = _choose_instance(prim, kind, instance)
+    where = f"joint {str(prim.GetPath())!r} ({inst})"
+    expected = "revolute" if is_angular(inst) else "prismatic"
+    if envelope.joint != expected:
+        raise InputError(
+            f"{where}: the envelope is for a {envelope.joint} joint, this drive needs a {expected} one"
+        )
+    units = stage_units(prim.GetStage())
+    _warn_before_write(prim, inst, kind, envelope, units, where)
+    drive = UsdPhysics.DriveAPI.Apply(prim, inst)
+    drive.CreateMaxForceAttr().Set(_to_float32(envelope.max_effort * units.effort(inst)))
+    if not prim.ApplyAPI(ENVELOPE_API, inst):
+        raise InputError(f"{where}: USD refused {ENVELOPE_API}:{inst} (are the physx-usd-schemas installed?)")
+    factors = {
+        "max_actuator_velocity": units.velocity(inst),
+        "velocity_dependent_resistance": units.per_speed(inst),
+        "speed_effort_gradient": units.speed_per_effort(inst),
+    }
+    for field, attr_name in _ATTRIBUTES.items():
+        value = getattr(envelope, field) * factors[field]
+        name = f"physxDrivePerformanceEnvelope:{inst}:{attr_name}"
+        prim.CreateAttribute(name, Sdf.ValueTypeNames.Float, False).Set(_to_float32(value))
+    return inst
+
+
+def _to_float32(value: float) -> float:
+    """The value USD will store (a float attribute): beyond float32 range it becomes inf."""
+    return math.inf if value > _FLT_MAX else float(value)
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, EnvelopeAuthoringWarning, stacklevel=3)
+
+
+def _warn_before_write(
+    prim: Usd.Prim, inst: str, kind: str, envelope: PerformanceEnvelope, units: StageUnits, where: str
+) -> None:
+    """Emit the authoring warnings that compare the new envelope with what the joint already has."""
+    from pxr import UsdPhysics
+
+    if not in_articulation(prim):
+        _warn(
+            f"{where}: not part of an articulation (no PhysicsArticulationRootAPI above its bodies); "
+            "PhysX ignores the envelope here"
+        )
+    if inst in ("transX", "transY", "transZ"):
+        _warn(f"{where}: PhysX 5.6 reads the envelope only on rotX/rotY/rotZ of a D6 joint, not on {inst}")
+    if not prim.HasAPI(UsdPhysics.DriveAPI, inst):
+        return
+    drive = UsdPhysics.DriveAPI(prim, inst)
+    current = drive.GetMaxForceAttr()
+    if current.HasAuthoredValue():
+        old = float(current.Get()) / units.effort(inst)
+        if not math.isclose(old, envelope.max_effort, rel_tol=1e-6):
+            _warn(f"{where}: replacing maxForce {old:.6g} with max_effort {envelope.max_effort:.6g} (SI)")
+    if is_angular(inst) and drive.GetTypeAttr().Get() != "acceleration":
+        _warn_per_radian_gains(drive, inst, envelope, units, where)
+
+
+def _warn_per_radian_gains(
+    drive: Any, inst: str, envelope: PerformanceEnvelope, units: StageUnits, where: str
+) -> None:
+    """Warn when a gain read per degree saturates maxEffort within one degree (or deg/s) of error."""
+    torque_usd = envelope.max_effort * units.effort(inst)
+    if not torque_usd > 0.0:
+        return
+    for label, attr in (("stiffness", drive.GetStiffnessAttr()), ("damping", drive.GetDampingAttr())):
+        value = attr.Get() if attr.HasAuthoredValue() else None
+        if value is not None and float(value) * _SUSPICIOUS_ERROR_DEG >= torque_usd:
+            _warn(
+                f"{where}: drive {label} {float(value):.6g} per degree saturates max_effort within "
+                f"{_SUSPICIOUS_ERROR_DEG:g} degree{'/s' if label == 'damping' else ''}: "
+                "USD stores angular gains per degree; was a per-radian value written?"
+            )
+
+
+# -- reading ------------------------------------------------------------------------------------------
+
+
+def read_envelope(
+    prim_or_stage: Any, joint_path: str | None = None, instance: str | None = None
+) -> PerformanceEnvelope:
+    """Read the envelope PhysX will use from a joint's drive: the exact inverse of :func:`write_envelope`.
+
+    Unauthored envelope attributes take the schema defaults PhysX uses: ``maxActuatorVelocity``
+    inf, the two slopes 0.
+
+    Args:
+        prim_or_stage: A ``Usd.Stage`` or ``Usd.Prim``, as for :func:`write_envelope`.
+        joint_path: Prim path of the joint, or None.
+        instance: Drive instance; default from the joint type.
+
+    Returns:
+        The envelope in SI (joint side), ``name`` set to the joint path.
+
+    Raises:
+        InputError: no such joint, no ``PhysxDrivePerformanceEnvelopeAPI:<inst>`` on it, an unlimited
+            maxForce, or negative / NaN values.
+    """
+    prim = resolve_joint(prim_or_stage, joint_path)
+    inst = _choose_instance(prim, joint_kind(prim), instance)
+    if not prim.HasAPI(ENVELOPE_API, inst):
+        raise InputError(f"joint {str(prim.GetPath())!r}: no {ENVELOPE_API}:{inst} applied")
+    envelope = _envelope_of(prim, inst, stage_units(prim.GetStage()))
+    if envelope is None:
+        raise InputError(
+            f"joint {str(prim.GetPath())!r} ({inst}): maxForce is unlimited; "
+            "an envelope needs a finite maxEffort"
+        )
+    return envelope
+
+
+def _drive_values(prim: Usd.Prim, inst: str, units: StageUnits) -> tuple[float, float, float]:
+    """``(max_effort, stiffness, damping)`` of a drive in SI (inf for an unlimited maxForce)."""
+    from pxr import UsdPhysics
+
+    drive = UsdPhysics.DriveAPI(prim, inst)
+    max_force = float(drive.GetMaxForceAttr().Get())
+    max_effort = math.inf if max_force >= _FLT_MAX else max_force / units.effort(inst)
+    if drive.GetTypeAttr().Get() == "acceleration":
+        # acceleration gains are per time only; angular ones are still per degree
+        angle = units.position(inst) if is_angular(inst) else 1.0
+        stiffness = float(drive.GetStiffnessAttr().Get()) * angle
+        damping = float(drive.GetDampingAttr().Get()) * angle
+    else:
+        stiffness = float(drive.GetStiffnessAttr().Get()) / units.per_position(inst)
+        damping = float(drive.GetDampingAttr().Get()) / units.per_speed(inst)
+    return max_effort, stiffness, damping
+
+
+def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnvelope | None:
+    """The envelope of an instance that has the API applied; None for an unlimited maxForce."""
+    max_effort, _, _ = _drive_values(prim, inst, units)
+    if math.isinf(max_effort):
+        return None
+    factors = {
+        "max_actuator_velocity": units.velocity(inst),
+        "velocity_dependent_resistance": units.per_speed(inst),
+        "speed_effort_gradient": units.speed_per_effort(inst),
+    }
+    values = {}
+    for field, attr_name in _ATTRIBUTES.items():
+        raw = prim.GetAttribute(f"physxDrivePerformanceEnvelope:{inst}:{attr_name}").Get()
+        value = float(raw) if raw is not None else (math.inf if field == "max_actuator_velocity" else 0.0)
+        if field == "max_actuator_velocity" and value >= _FLT_MAX:
+            value = math.inf
+        values[field] = value / factors[field]
+    joint: JointType = "revolute" if is_angular(inst) else "prismatic"
+    try:
+        return PerformanceEnvelope(max_effort=max_effort, joint=joint, name=str(prim.GetPath()), **values)
+    except InputError as exc:
+        raise InputError(f"joint {str(prim.GetPath())!r} ({inst}): {exc}") from None
+
+
+def _drive_instances(prim: Usd.Prim) -> list[str]:
+    """Instances of PhysicsDriveAPI applied on a prim, in a stable order."""
+    names = []
+    for schema in prim.GetAppliedSchemas():
+        api, _, inst = str(schema).partition(":")
+        if api == _DRIVE_API and inst:
+            names.append(inst)
+    order = {name: i for i, name in enumerate(ANGULAR_INSTANCES + LINEAR_INSTANCES)}
+    return sorted(names, key=lambda name: (order.get(name, len(order)), name))
+
+
+def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
+    """Every drive on every revolute, prismatic or D6 joint of the stage, in SI, in stage order."""
+    from pxr import Usd, UsdPhysics
+
+    units = stage_units(stage)
+    records = []
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
+        if not prim.IsA(UsdPhysics.Joint):
+            continue
+        try:
+            kind = joint_kind(prim)
+        except InputError:
+            continue
+        articulated = in_articulation(prim)
+        for inst in _drive_instances(prim):
+            max_effort, stiffness, damping = _drive_values(prim, inst, units)
+            envelope = _envelope_of(prim, inst, units) if prim.HasAPI(ENVELOPE_API, inst) else None
+            records.append(
+                DriveRecord(
+                    joint_path=str(prim.GetPath()),
+                    joint_kind=kind,
+                    instance=inst,
+                    in_articulation=articulated,
+                    max_effort=max_effort,
+                    stiffness=stiffness,
+                    damping=damping,
+                    envelope=envelope,
+                )
+            )
+    return records

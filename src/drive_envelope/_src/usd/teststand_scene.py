@@ -1,0 +1,185 @@
+"""The test-stand scene as USD: one fixed-base articulation with one driven joint.
+
+Layout (``metersPerUnit`` / ``kilogramsPerUnit`` as given, Z up, no gravity)::
+
+    /World/physicsScene        PhysicsScene + PhysxSceneAPI (solver type, step rate)
+    /World/stand               ArticulationRootAPI + PhysxArticulationAPI (iteration counts)
+    /World/stand/base          rigid body, welded to the world by /World/stand/rootJoint
+    /World/stand/link          rigid body: the scenario's inertia about Z (revolute) or its mass (prismatic)
+    /World/stand/joint         revolute about Z or prismatic along X, PhysicsDriveAPI + envelope
+
+The link has zero linear and angular damping and ``cfmScale`` 0, and the joint no friction, no
+armature and no velocity cap, so the drive and the envelope are the only actuator physics; the
+envelope is authored with :func:`~drive_envelope._src.usd.authoring.write_envelope` (the same code
+path as ``drive-envelope usd apply``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import TYPE_CHECKING
+
+from drive_envelope._src.usd.scale import StageUnits
+
+if TYPE_CHECKING:
+    from pxr import Usd
+
+    from drive_envelope._src.teststand.scenario import Scenario
+
+__all__ = ["ARTICULATION_PATH", "JOINT_PATH", "LINK_PATH", "build_teststand_stage"]
+
+ARTICULATION_PATH = "/World/stand"
+"""Prim path of the articulation root (the tensor-binding pattern)."""
+LINK_PATH = "/World/stand/link"
+"""Prim path of the driven link."""
+JOINT_PATH = "/World/stand/joint"
+"""Prim path of the driven joint."""
+_HUGE = 1.0e30  # "no cap" for PhysX floats that have a finite default
+
+
+def build_teststand_stage(
+    scenario: Scenario, path: str | os.PathLike[str] | None = None, *, units: StageUnits | None = None
+) -> Usd.Stage:
+    """Author the scenario as a USD stage (and export it to ``path`` when given).
+
+    Args:
+        scenario: The test-stand scenario (SI).
+        path: Where to write the stage (``.usda``), or None for an in-memory stage only.
+        units: Stage units; SI (1 m, 1 kg) by default. Every value is converted to them.
+
+    Returns:
+        The stage.
+    """
+    from drive_envelope._src.usd.apply import register_schemas
+
+    register_schemas()
+    from pxr import Sdf, Usd, UsdGeom, UsdPhysics
+
+    units = units or StageUnits()
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, units.meters_per_unit)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, units.kilograms_per_unit)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    _define_scene(stage, scenario)
+    root = UsdGeom.Xform.Define(stage, ARTICULATION_PATH).GetPrim()
+    UsdPhysics.ArticulationRootAPI.Apply(root)
+    root.ApplyAPI("PhysxArticulationAPI")
+    sim = scenario.simulation
+    _set(
+        root,
+        "physxArticulation:solverPositionIterationCount",
+        Sdf.ValueTypeNames.Int,
+        sim.position_iterations,
+    )
+    _set(
+        root,
+        "physxArticulation:solverVelocityIterationCount",
+        Sdf.ValueTypeNames.Int,
+        sim.velocity_iterations,
+    )
+    _set(root, "physxArticulation:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    _set(root, "physxArticulation:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    _set(root, "physxArticulation:enabledSelfCollisions", Sdf.ValueTypeNames.Bool, False)
+    _define_body(stage, f"{ARTICULATION_PATH}/base", mass=1.0, inertia=(1.0, 1.0, 1.0))
+    fixed = UsdPhysics.FixedJoint.Define(stage, f"{ARTICULATION_PATH}/rootJoint")
+    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{ARTICULATION_PATH}/base")])
+    revolute = scenario.joint.type == "revolute"
+    mass_si = 1.0 if revolute else scenario.joint.inertia
+    inertia_si = scenario.joint.inertia if revolute else 1.0
+    _define_body(
+        stage,
+        LINK_PATH,
+        mass=mass_si * units.mass(),
+        inertia=(inertia_si * units.inertia(),) * 3,
+    )
+    _define_joint(stage, scenario, units)
+    if path is not None:
+        stage.GetRootLayer().Export(os.fspath(path))
+    return stage
+
+
+def _set(prim: Usd.Prim, name: str, type_name: object, value: object) -> None:
+    prim.CreateAttribute(name, type_name, False).Set(value)
+
+
+def _define_scene(stage: Usd.Stage, scenario: Scenario) -> None:
+    from pxr import Gf, Sdf, UsdPhysics
+
+    scene = UsdPhysics.Scene.Define(stage, "/World/physicsScene")
+    scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, 0.0, -1.0))
+    scene.CreateGravityMagnitudeAttr().Set(0.0)
+    prim = scene.GetPrim()
+    prim.ApplyAPI("PhysxSceneAPI")
+    sim = scenario.simulation
+    _set(prim, "physxScene:solverType", Sdf.ValueTypeNames.Token, sim.solver.upper())
+    _set(prim, "physxScene:timeStepsPerSecond", Sdf.ValueTypeNames.UInt, max(1, round(1.0 / sim.dt)))
+    # explicit: the schema default flipped (ovphysx 0.3's bundled schema: false, physx-usd-schemas
+    # 25.11: true); the reference engine models true, TGS's per-substep forces and envelope clamp
+    _set(prim, "physxScene:enableExternalForcesEveryIteration", Sdf.ValueTypeNames.Bool, True)
+    _set(prim, "physxScene:enableStabilization", Sdf.ValueTypeNames.Bool, False)
+    _set(prim, "physxScene:enableGPUDynamics", Sdf.ValueTypeNames.Bool, False)
+    _set(prim, "physxScene:broadphaseType", Sdf.ValueTypeNames.Token, "MBP")
+
+
+def _define_body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[float, float, float]) -> None:
+    from pxr import Gf, Sdf, UsdGeom, UsdPhysics
+
+    prim = UsdGeom.Xform.Define(stage, path).GetPrim()
+    UsdPhysics.RigidBodyAPI.Apply(prim)
+    mass_api = UsdPhysics.MassAPI.Apply(prim)
+    mass_api.CreateMassAttr().Set(float(mass))
+    mass_api.CreateDiagonalInertiaAttr().Set(Gf.Vec3f(*inertia))
+    mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(0.0, 0.0, 0.0))
+    prim.ApplyAPI("PhysxRigidBodyAPI")
+    # PhysX defaults: angular damping 0.05 and cfmScale 0.025 would add effort the drive model lacks
+    _set(prim, "physxRigidBody:linearDamping", Sdf.ValueTypeNames.Float, 0.0)
+    _set(prim, "physxRigidBody:angularDamping", Sdf.ValueTypeNames.Float, 0.0)
+    _set(prim, "physxRigidBody:cfmScale", Sdf.ValueTypeNames.Float, 0.0)
+    _set(prim, "physxRigidBody:maxLinearVelocity", Sdf.ValueTypeNames.Float, _HUGE)
+    _set(prim, "physxRigidBody:maxAngularVelocity", Sdf.ValueTypeNames.Float, _HUGE)
+    _set(prim, "physxRigidBody:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    _set(prim, "physxRigidBody:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
+
+
+def _define_joint(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
+    from pxr import Sdf, UsdPhysics
+
+    from drive_envelope._src.usd.authoring import write_envelope
+
+    revolute = scenario.joint.type == "revolute"
+    if revolute:
+        joint = UsdPhysics.RevoluteJoint.Define(stage, JOINT_PATH)
+        joint.CreateAxisAttr().Set(UsdPhysics.Tokens.z)
+    else:
+        joint = UsdPhysics.PrismaticJoint.Define(stage, JOINT_PATH)
+        joint.CreateAxisAttr().Set(UsdPhysics.Tokens.x)
+    joint.CreateBody0Rel().SetTargets([Sdf.Path(f"{ARTICULATION_PATH}/base")])
+    joint.CreateBody1Rel().SetTargets([Sdf.Path(LINK_PATH)])
+    prim = joint.GetPrim()
+    inst = "angular" if revolute else "linear"
+    # per-axis joint properties (PhysX reads PhysxJointAxisAPI before the older PhysxJointAPI)
+    prim.ApplyAPI("PhysxJointAxisAPI", inst)
+    for name in ("armature", "staticFrictionEffort", "dynamicFrictionEffort", "viscousFrictionCoefficient"):
+        _set(prim, f"physxJointAxis:{inst}:{name}", Sdf.ValueTypeNames.Float, 0.0)
+    _set(prim, f"physxJointAxis:{inst}:maxJointVelocity", Sdf.ValueTypeNames.Float, _HUGE)
+    spec = scenario.drive
+    drive = UsdPhysics.DriveAPI.Apply(prim, inst)
+    drive.CreateTypeAttr().Set(spec.type)
+    if spec.type == "force":
+        stiffness, damping = spec.stiffness * units.per_position(inst), spec.damping * units.per_speed(inst)
+    else:  # acceleration gains: per time only, but per degree on angular drives like every gain
+        angle = 1.0 / units.position(inst) if revolute else 1.0
+        stiffness, damping = spec.stiffness * angle, spec.damping * angle
+    drive.CreateStiffnessAttr().Set(float(stiffness))
+    drive.CreateDampingAttr().Set(float(damping))
+    drive.CreateTargetPositionAttr().Set(float(spec.target_position * units.position(inst)))
+    drive.CreateTargetVelocityAttr().Set(float(spec.target_velocity * units.velocity(inst)))
+    envelope = scenario.envelope
+    if envelope is not None:
+        write_envelope(prim, None, envelope, inst)
+    else:
+        max_force = spec.max_effort * units.effort(inst)
+        drive.CreateMaxForceAttr().Set(math.inf if math.isinf(max_force) else float(max_force))

@@ -1,0 +1,46 @@
+"""The test stand: one actuated joint simulated with PhysX's drive and performance envelope.
+
+``load_scenario("stand.toml", overrides=["drive.target_velocity=12"])`` reads a scenario file,
+``simulate(scenario, engine="reference")`` runs it and returns a :class:`Trajectory` (time,
+position, velocity and the step-average total actuator effort, SI), which ``save_trajectory`` writes
+as CSV or JSON. The ``reference`` engine is a float64 NumPy model of the PhysX articulation solver
+(PGS and TGS); ``mujoco`` and ``physx`` need their extras.
+"""
+
+from __future__ import annotations
+
+from drive_envelope._src.teststand.engines import ENGINES, engine_names, simulate
+from drive_envelope._src.teststand.scenario import (
+    DriveSpec,
+    JointSpec,
+    LoadSpec,
+    Scenario,
+    SimulationSpec,
+    load_scenario,
+    scenario_from_mapping,
+)
+from drive_envelope._src.teststand.trajectory import (
+    Trajectory,
+    read_trajectory,
+    save_trajectory,
+    trajectory_to_csv,
+    trajectory_to_json,
+)
+
+__all__ = [
+    "ENGINES",
+    "DriveSpec",
+    "JointSpec",
+    "LoadSpec",
+    "Scenario",
+    "SimulationSpec",
+    "Trajectory",
+    "engine_names",
+    "load_scenario",
+    "read_trajectory",
+    "save_trajectory",
+    "scenario_from_mapping",
+    "simulate",
+    "trajectory_to_csv",
+    "trajectory_to_json",
+]

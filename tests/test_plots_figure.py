@@ -1,0 +1,119 @@
+"""Envelope figures and `drive-envelope plot`: files are written, handles and artists are right."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope import InputError, PerformanceEnvelope
+from drive_envelope._src.cli.main import main
+from drive_envelope._src.teststand.engines.reference import simulate
+from drive_envelope._src.teststand.scenario import load_scenario
+
+pytestmark = pytest.mark.plot
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+SCENARIO = EXAMPLES / "scenarios" / "step_response_tgs.toml"
+ENV = PerformanceEnvelope(
+    max_effort=10.0,
+    max_actuator_velocity=6.0,
+    velocity_dependent_resistance=0.5,
+    speed_effort_gradient=0.2,
+    name="demo",
+)
+
+
+def test_plot_envelope_returns_a_handle_with_the_boundary_drawn() -> None:
+    """plot_envelope gives .figure, .axes and .lines; the region is the curve's polygon."""
+    from drive_envelope.plots import envelope_curve, plot_envelope
+
+    curve = envelope_curve(ENV)
+    plot = plot_envelope(curve)
+    assert len(plot.axes) == 1
+    assert plot.curve is curve
+    outline = plot.lines["region"][1]
+    np.testing.assert_allclose(outline.get_xydata()[:-1], curve.boundary)
+    assert len(plot.lines["eq1"]) == len(plot.lines["eq2"]) == 4
+    labels = plot.axes[0].get_legend_handles_labels()[1]
+    assert any(label.startswith("eq. 1:") for label in labels)
+
+
+def test_trajectory_adds_points_and_a_time_panel() -> None:
+    """With a trajectory the plane gets its points (coloured by time) and a velocity/effort panel."""
+    from drive_envelope.plots import plot_envelope
+
+    trajectory = simulate(load_scenario(SCENARIO, ["simulation.duration=0.2"]))
+    mask = np.zeros(len(trajectory), dtype=bool)
+    mask[3] = True
+    plot = plot_envelope(ENV, trajectory=trajectory, highlight=mask)
+    assert len(plot.axes) == 3
+    points = plot.lines[f"points:{trajectory.name}"][0]
+    np.testing.assert_allclose(
+        points.get_offsets(), np.column_stack([trajectory.velocity, trajectory.effort])
+    )
+    np.testing.assert_allclose(points.get_array(), trajectory.time)
+    np.testing.assert_allclose(
+        plot.lines["highlight"][0].get_xydata(), [[trajectory.velocity[3], trajectory.effort[3]]]
+    )
+    # the window grows to hold every operating point
+    assert plot.curve is not None
+    assert plot.curve.velocity_extent >= np.max(np.abs(trajectory.velocity))
+
+
+def test_plot_into_given_axes_and_bad_highlight() -> None:
+    """ax= draws into an existing axes; a mask of the wrong length raises InputError."""
+    from matplotlib.figure import Figure
+
+    from drive_envelope.plots import plot_envelope
+
+    ax = Figure().add_subplot()
+    plot = plot_envelope(ENV, ax=ax)
+    assert plot.axes == (ax,)
+    trajectory = simulate(load_scenario(SCENARIO, ["simulation.duration=0.05"]))
+    with pytest.raises(InputError, match="highlight must be a boolean mask"):
+        plot_envelope(ENV, trajectory=trajectory, highlight=[True])
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg", ".pdf"])
+def test_plot_command_writes_each_format(tmp_path: Path, suffix: str) -> None:
+    """`drive-envelope plot SCENARIO --trajectory CSV --output fig.*` writes a non-empty file."""
+    csv = tmp_path / "run.csv"
+    assert main(["simulate", str(SCENARIO), "-o", str(csv), "--set", "simulation.duration=0.3"]) == 0
+    figure = tmp_path / f"fig{suffix}"
+    assert main(["plot", str(SCENARIO), "--trajectory", str(csv), "--output", str(figure)]) == 0
+    assert figure.stat().st_size > 1000
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_plot_command_reads_envelope_files(tmp_path: Path) -> None:
+    """An envelope file is plotted without a trajectory."""
+    figure = tmp_path / "env.png"
+    assert main(["plot", str(EXAMPLES / "envelopes" / "demo.toml"), "-o", str(figure)]) == 0
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_command_bad_suffix_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """An unsupported output suffix exits 2 with one line and writes nothing."""
+    assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "fig.bmp")]) == 2
+    assert "expected a .png, .svg or .pdf" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_importing_plots_does_not_import_matplotlib() -> None:
+    """drive_envelope.plots and the CLI parser import matplotlib only when a figure is drawn."""
+    code = (
+        "import sys, drive_envelope.plots, drive_envelope.teststand;"
+        "from drive_envelope._src.cli.main import build_parser; build_parser();"
+        "assert 'matplotlib' not in sys.modules, 'matplotlib imported'"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_plot_to_missing_folder_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A figure path in a missing folder exits 2 with one line."""
+    assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "missing" / "fig.png")]) == 2
+    assert "cannot write" in capsys.readouterr().err

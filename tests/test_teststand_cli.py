@@ -1,0 +1,122 @@
+"""`drive-envelope simulate`: files, formats, overrides, engines and exit status 2 on bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope import InputError
+from drive_envelope._src.cli.main import main
+from drive_envelope._src.teststand import engines
+from drive_envelope._src.teststand.scenario import load_scenario
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
+SATURATION = EXAMPLES / "velocity_saturation_tgs.toml"
+
+
+def test_simulate_writes_the_specified_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """simulate --output OUT.csv writes the header, the initial row and one row per step."""
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(SATURATION), "--engine", "reference", "--output", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time,position,velocity,effort"
+    assert len(lines) == 1 + 1 + 120
+    assert lines[1] == "0.0,0.0,0.0,0.0"
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data[-1, 2] == pytest.approx(3.0, abs=1e-12)  # saturates exactly at max_actuator_velocity
+    assert "wrote 121 rows" in capsys.readouterr().out
+
+
+def test_simulate_json_and_overrides(tmp_path: Path) -> None:
+    """--format json and --set change the output format and the scenario."""
+    out = tmp_path / "out.txt"
+    argv = ["simulate", str(SATURATION), "-o", str(out), "--format", "json"]
+    assert main([*argv, "--set", "envelope.max_actuator_velocity=2", "--set", "simulation.duration=0.5"]) == 0
+    data = json.loads(out.read_text())
+    assert len(data["time"]) == 61
+    assert data["velocity"][-1] == pytest.approx(2.0, abs=1e-12)
+    assert data["engine"] == "reference"
+
+
+def test_simulate_without_output_prints_csv(capsys: pytest.CaptureFixture[str]) -> None:
+    """Without --output the CSV goes to stdout."""
+    assert main(["simulate", str(SATURATION), "--set", "simulation.duration=0.05"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == "time,position,velocity,effort"
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--set", "drive.stifness=3"], "unknown key 'drive.stifness' (did you mean 'stiffness'?)"),
+        (["--set", "nonsense"], "expected section.key=value"),
+        (["--set", "joint.inertia=-1"], "joint.inertia must be > 0"),
+    ],
+)
+def test_bad_scenarios_exit_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], needle: str
+) -> None:
+    """Invalid scenario values exit 2 with one 'drive-envelope: error:' line and write nothing."""
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(SATURATION), "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("drive-envelope: error: ")
+    assert needle in err
+    assert err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_bad_file_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A scenario file with a wrong unit exits 2 naming the file and key."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[joint]\ninertia = '2 m'\n")
+    assert main(["simulate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and "joint.inertia" in err
+
+
+def test_missing_engine_package_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An engine whose package is absent raises one line naming the extra to install."""
+    real = engines.importlib.util.find_spec
+    monkeypatch.setattr(
+        engines.importlib.util, "find_spec", lambda name: None if name == "ovphysx" else real(name)
+    )
+    with pytest.raises(InputError, match=r"pip install 'drive-envelope\[physx\]'"):
+        engines.engine_module("physx")
+
+
+def test_unknown_engine_is_refused() -> None:
+    """An unknown engine name lists the valid ones."""
+    with pytest.raises(InputError, match="valid engines: reference, mujoco, physx"):
+        engines.engine_module("bullet")
+
+
+def test_engine_failing_to_import_its_package_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A lazily imported package that is missing at run time is reported as the engine's extra."""
+
+    class FakeEngine:
+        @staticmethod
+        def simulate(_: object) -> None:
+            raise ModuleNotFoundError("No module named 'mujoco'", name="mujoco")
+
+    monkeypatch.setattr(engines, "engine_module", lambda name: FakeEngine)
+    with pytest.raises(InputError, match=r"drive-envelope\[mujoco\]"):
+        engines.simulate(load_scenario(SATURATION), "mujoco")
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.toml")), ids=lambda p: p.stem)
+def test_bundled_scenarios_run(path: Path, tmp_path: Path) -> None:
+    """Every bundled scenario simulates to finite values with the reference engine."""
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(path), "-o", str(out), "--set", "simulation.duration=0.1"]) == 0
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert np.all(np.isfinite(data))
+
+
+def test_unwritable_output_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """An output in a missing folder exits 2 with one line instead of a traceback."""
+    out = tmp_path / "missing" / "out.csv"
+    assert main(["simulate", str(SATURATION), "-o", str(out), "--set", "simulation.duration=0.05"]) == 2
+    assert "cannot write" in capsys.readouterr().err

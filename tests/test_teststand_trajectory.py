@@ -1,0 +1,108 @@
+"""Trajectory files: CSV/JSON writers (atomic), readers and their errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope import InputError
+from drive_envelope._src.teststand.trajectory import (
+    Trajectory,
+    read_trajectory,
+    save_trajectory,
+    trajectory_to_csv,
+)
+
+
+def sample() -> Trajectory:
+    return Trajectory(
+        time=np.array([0.0, 0.1, 0.2]),
+        position=np.array([0.0, 0.01, 0.035]),
+        velocity=np.array([0.0, 0.1, 0.25]),
+        effort=np.array([0.0, 1.0 / 3.0, -2.5]),
+        joint="prismatic",
+        engine="reference",
+        name="demo",
+        metadata={"solver": "tgs"},
+    )
+
+
+def test_csv_has_the_specified_header_and_round_trips_exactly(tmp_path: Path) -> None:
+    """CSV starts with time,position,velocity,effort; floats round-trip bit for bit."""
+    path = tmp_path / "out.csv"
+    save_trajectory(sample(), path)
+    assert path.read_text().splitlines()[0] == "time,position,velocity,effort"
+    back = read_trajectory(path, joint="prismatic")
+    for column in ("time", "position", "velocity", "effort"):
+        np.testing.assert_array_equal(getattr(back, column), getattr(sample(), column))
+    assert back.units["effort"] == "N"
+
+
+def test_json_keeps_metadata_and_units(tmp_path: Path) -> None:
+    """JSON output holds the columns plus engine, joint, units and metadata."""
+    path = tmp_path / "out.json"
+    save_trajectory(sample(), path)
+    data = json.loads(path.read_text())
+    assert data["engine"] == "reference" and data["joint"] == "prismatic"
+    assert data["units"]["velocity"] == "m/s"
+    assert data["metadata"] == {"solver": "tgs"}
+    back = read_trajectory(path)
+    np.testing.assert_array_equal(back.effort, sample().effort)
+    assert back.joint == "prismatic"
+
+
+def test_format_argument_overrides_the_suffix(tmp_path: Path) -> None:
+    """format='json' writes JSON even to a .csv name."""
+    path = tmp_path / "out.csv"
+    save_trajectory(sample(), path, format="json")
+    assert json.loads(path.read_text())["name"] == "demo"
+
+
+def test_empty_effort_cell_reads_as_zero(tmp_path: Path) -> None:
+    """Row 0 with an empty effort cell (another engine's convention) reads as 0.0."""
+    path = tmp_path / "x.csv"
+    path.write_text("time,position,velocity,effort\n0,0,0,\n0.1,0.01,0.1,2.0\n")
+    assert read_trajectory(path).effort.tolist() == [0.0, 2.0]
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        ("time,position,velocity\n0,0,0\n", "missing column(s) effort"),
+        ("time,position,velocity,effort\n0,0,abc,0\n", "line 2, column 'velocity'"),
+        ("time,position,velocity,effort\n", "no data rows"),
+    ],
+)
+def test_bad_csv_files_are_reported_in_one_line(tmp_path: Path, text: str, needle: str) -> None:
+    """A missing column, a non-number or an empty file gives one InputError line."""
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=needle.replace("(", r"\(").replace(")", r"\)")):
+        read_trajectory(path)
+
+
+def test_unequal_columns_are_refused() -> None:
+    """Columns of different lengths raise InputError."""
+    with pytest.raises(InputError, match="different lengths"):
+        Trajectory(time=np.zeros(3), position=np.zeros(2), velocity=np.zeros(3), effort=np.zeros(3))
+
+
+def test_failed_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A writer that fails midway leaves neither the target nor a temporary file."""
+    import drive_envelope._src.teststand.trajectory as module
+
+    def boom(_: Trajectory) -> str:
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(module, "trajectory_to_csv", boom)
+    with pytest.raises(RuntimeError):
+        module.save_trajectory(sample(), tmp_path / "out.csv")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_csv_text_has_one_row_per_sample() -> None:
+    """trajectory_to_csv writes a header plus one row per sample."""
+    assert len(trajectory_to_csv(sample()).splitlines()) == 4
