@@ -16,7 +16,12 @@ $(STAMP): pyproject.toml Makefile
 	$(BIN)/python -m pip install -q --disable-pip-version-check -e '.[$(EXTRAS)]'
 	touch $@
 
-setup: $(STAMP)
+# the native MuJoCo actuator plugin, built against the installed mujoco wheel's headers and library
+PLUGIN := plugin/mujoco/build/libdrive_envelope_mujoco.so
+$(PLUGIN): $(STAMP) $(wildcard plugin/mujoco/*.cc plugin/mujoco/*.h) plugin/mujoco/CMakeLists.txt
+	$(BIN)/python -m drive_envelope._src.adapters.mujoco.build --quiet
+
+setup: $(STAMP) $(PLUGIN)
 
 # the main job: datasheet -> envelope -> simulated actuator -> plot (files in build/demo/)
 demo: setup
@@ -47,4 +52,4 @@ bench: setup
 	$(BIN)/python benchmarks/run_all.py
 
 clean:
-	rm -rf $(VENV) build dist .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build

@@ -1,0 +1,140 @@
+// Copyright 2026 The drive-envelope authors. BSD-3-Clause.
+//
+// The PhysX drive of one DOF, header-only and free of MuJoCo types: the implicit PD impulse and
+// the performance-envelope clamp. These are C++ ports of the Python core
+// (drive_envelope.implicit_drive_effort, drive_envelope.clamp_drive_impulse), which in turn follow
+// PhysX 5.6+ (computeImplicitDriveParams, Dy::clampDriveImpulse). The float instantiation of
+// ClampDriveImpulse reproduces the Python float32 mode bit for bit (same operations, same order);
+// build with -ffp-contract=off so that the compiler does not fuse them.
+
+#ifndef DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_
+#define DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_
+
+#include <cfloat>
+#include <cmath>
+
+namespace drive_envelope::mujoco_plugin {
+
+// PhysX's absolute epsilon for near-zero denominators (PX_EPS_F32 = 2^-23)
+constexpr double kPxEps = FLT_EPSILON;
+
+// PhysX's sentinel for an absent bound (PX_MAX_F32)
+constexpr double kPxMax = FLT_MAX;
+
+enum class DriveType { kForce, kAcceleration };
+
+// PxMax for floats (PhysX's selectMax): a > b ? a : b, so a NaN in a does not survive; this decides
+// what a NaN bound turns into, e.g. (dev - inf) / inf
+template <typename T>
+inline T PxMax(T a, T b) { return a > b ? a : b; }
+
+// PxMin for floats: a < b ? a : b
+template <typename T>
+inline T PxMin(T a, T b) { return a < b ? a : b; }
+
+template <typename T>
+struct Bounds {
+  T lower;
+  T upper;
+};
+
+// feasible [lower, upper] of a positive request against |v| <= max - k*|x|
+template <typename T>
+inline Bounds<T> BoundsPositive(T dev, T max, T denom1, T denom2, T impulse) {
+  const T eps = static_cast<T>(kPxEps), big = static_cast<T>(kPxMax), zero = 0;
+
+  // the curve is ignored
+  if (std::fabs(denom2) < eps) return {-big, big};
+
+  // denom1 ~ 0: the lower curve is a yes/no test on (dev - max)
+  if (std::fabs(denom1) < eps) {
+    T bound2 = (dev + max) / denom2;
+    T bound1 = std::fabs(dev - max) < eps ? -big : ((dev - max) > zero ? big : -big);
+    return {PxMax(zero, bound1), bound2};
+  }
+  T bound1 = (dev - max) / denom1;
+  T bound2 = (dev + max) / denom2;
+  if (denom1 >= zero) return {PxMax(zero, bound1), PxMin(bound2, impulse)};
+  return {zero, PxMin(PxMin(bound1, bound2), impulse)};
+}
+
+// feasible [lower, upper] of a negative (or zero) request
+template <typename T>
+inline Bounds<T> BoundsNegative(T dev, T max, T denom1, T denom2, T impulse) {
+  const T eps = static_cast<T>(kPxEps), big = static_cast<T>(kPxMax), zero = 0;
+  if (std::fabs(denom1) < eps) return {-big, big};
+  if (std::fabs(denom2) < eps) {
+    T bound1 = (dev - max) / denom1;
+    T bound2 = std::fabs(dev + max) < eps ? big : ((dev + max) > zero ? big : -big);
+    return {bound1, PxMin(zero, bound2)};
+  }
+  T bound1 = (dev - max) / denom1;
+  T bound2 = (dev + max) / denom2;
+  if (denom2 >= zero) return {PxMax(bound1, impulse), PxMin(zero, bound2)};
+  return {PxMax(PxMax(bound1, bound2), impulse), zero};
+}
+
+// clamp a requested total drive impulse x so that x and v(x) = v0 + r*(x - x0) satisfy
+//   |v(x)| <= max_joint_vel - speed_impulse_gradient*|x|
+//   |x|    <= max_impulse - velocity_dependent_resistance*|v(x)|   (|x| <= max_impulse if 0)
+// keeps the sign of the request, never grows it, and returns 0 when no such x exists
+template <typename T>
+inline T ClampDriveImpulse(T joint_vel0, T drive_impulse0, T drive_impulse, T response,
+                           T max_joint_vel, T max_impulse, T speed_impulse_gradient,
+                           T velocity_dependent_resistance) {
+  const T zero = 0, one = 1;
+  T dev = drive_impulse0 * response - joint_vel0;
+  T resist = velocity_dependent_resistance;
+  Bounds<T> b1, b2;
+  if (drive_impulse > zero) {
+    b1 = BoundsPositive(dev, max_joint_vel, response - speed_impulse_gradient,
+                        response + speed_impulse_gradient, drive_impulse);
+    if (resist == zero) {
+      b2 = {-max_impulse, max_impulse};
+    } else {
+      // eq. 1 written as |v| <= max_impulse/R - (1/R)*|x|
+      T inv = one / resist;
+      b2 = BoundsPositive(dev, max_impulse / resist, response - inv, response + inv,
+                          drive_impulse);
+    }
+  } else {
+    b1 = BoundsNegative(dev, max_joint_vel, response + speed_impulse_gradient,
+                        response - speed_impulse_gradient, drive_impulse);
+    if (resist == zero) {
+      b2 = {-max_impulse, max_impulse};
+    } else {
+      T inv = one / resist;
+      b2 = BoundsNegative(dev, max_impulse / resist, response + inv, response - inv,
+                          drive_impulse);
+    }
+  }
+  T lower = PxMax(b1.lower, b2.lower);
+  T upper = PxMin(b1.upper, b2.upper);
+
+  // empty interval: even zero effort is infeasible, the drive lets go
+  if (lower > upper) return zero;
+  return PxMin(upper, PxMax(lower, drive_impulse));
+}
+
+// unclamped effort of one step of PhysX's implicit PD drive (spring and damper both implicit):
+//   J = dt*k*(err - dt*v1) + dt*c*(vt - v1),  v1 = v + r*J
+// so with a = dt*(dt*k + c): J = (dt*k*err + dt*c*vt - a*v) / (1 + a*r); returns J/dt.
+// an acceleration drive uses a unit response and divides the impulse by r
+inline double ImplicitDriveEffort(double stiffness, double damping, double position_error,
+                                  double velocity, double target_velocity, double response,
+                                  double dt, DriveType type) {
+  double a = dt * (dt * stiffness + damping);
+  double rhs = dt * stiffness * position_error + dt * damping * target_velocity - a * velocity;
+  double impulse;
+  if (type == DriveType::kForce) {
+    // PhysX's guard: a DOF that does not respond gets no drive
+    impulse = response > 0 ? (1.0 / (1.0 + a * response)) * rhs : 0.0;
+  } else {
+    impulse = rhs / ((1.0 + a) * response);
+  }
+  return impulse / dt;
+}
+
+}  // namespace drive_envelope::mujoco_plugin
+
+#endif  // DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_

@@ -1,0 +1,1 @@
+"""Engine adapters (private): one package per engine, each importing its engine lazily."""

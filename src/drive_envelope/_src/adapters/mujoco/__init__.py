@@ -1,0 +1,1 @@
+"""MuJoCo adapter internals: the plugin build, its loader, MjSpec helpers and the test stand."""

@@ -1,0 +1,159 @@
+"""Build the MuJoCo plugin ``drive_envelope.envelope`` against the installed ``mujoco`` wheel.
+
+Run ``python -m drive_envelope._src.adapters.mujoco.build`` (part of ``make setup``). The wheel
+ships the headers (``mujoco/include``) and the library (``mujoco/libmujoco.so.X.Y.Z``); CMake
+compiles ``plugin/mujoco`` against exactly those and writes the library plus ``build-info.json``
+(the MuJoCo version it was built for) to ``plugin/mujoco/build`` (git-ignored).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from drive_envelope._src.io.atomic import atomic_write_text
+from drive_envelope.errors import DriveEnvelopeError
+
+__all__ = [
+    "BUILD_COMMAND",
+    "BUILD_INFO",
+    "PluginError",
+    "build_plugin",
+    "default_build_dir",
+    "library_name",
+    "main",
+    "mujoco_paths",
+    "plugin_source_dir",
+]
+
+BUILD_COMMAND = "python -m drive_envelope._src.adapters.mujoco.build"
+"""The command that builds the plugin (quoted in every error about a missing or stale build)."""
+BUILD_INFO = "build-info.json"
+"""File beside the library that records the MuJoCo version it was built against."""
+
+
+class PluginError(DriveEnvelopeError, RuntimeError):
+    """The MuJoCo plugin is missing, stale (another MuJoCo version) or cannot be built or loaded."""
+
+
+def plugin_source_dir() -> Path:
+    """``plugin/mujoco`` of the source tree this package was installed from (editable install)."""
+    return Path(__file__).resolve().parents[5] / "plugin" / "mujoco"
+
+
+def default_build_dir() -> Path:
+    """Where the build goes and where :func:`load_plugin` looks: ``plugin/mujoco/build``."""
+    return plugin_source_dir() / "build"
+
+
+def library_name() -> str:
+    """File name of the plugin library on this platform."""
+    if sys.platform == "darwin":
+        return "libdrive_envelope_mujoco.dylib"
+    if sys.platform == "win32":
+        return "drive_envelope_mujoco.dll"
+    return "libdrive_envelope_mujoco.so"
+
+
+def mujoco_paths() -> tuple[Path, Path, str]:
+    """Headers directory, shared library and version of the installed ``mujoco`` wheel.
+
+    Raises:
+        PluginError: mujoco is not installed or its wheel lacks the headers or the library.
+    """
+    try:
+        import mujoco
+    except ImportError:
+        raise PluginError(
+            "the MuJoCo plugin needs the 'mujoco' extra: pip install 'drive-envelope[mujoco]'"
+        ) from None
+    root = Path(mujoco.__file__).resolve().parent
+    include = root / "include"
+    if not (include / "mujoco" / "mujoco.h").is_file():
+        raise PluginError(f"{include}: the mujoco wheel has no headers (mujoco/mujoco.h)")
+    patterns = ("libmujoco.so*", "libmujoco*.dylib", "mujoco.lib")
+    libraries = sorted(p for pattern in patterns for p in root.glob(pattern) if p.is_file())
+    if not libraries:
+        raise PluginError(f"{root}: the mujoco wheel has no MuJoCo library (libmujoco.so*)")
+    return include, libraries[-1], str(mujoco.__version__)
+
+
+def _run(command: list[str], quiet: bool) -> None:
+    result = subprocess.run(command, capture_output=quiet, text=True, check=False)
+    if result.returncode != 0:
+        detail = (result.stderr or result.stdout or "").strip().splitlines()[-20:] if quiet else []
+        tail = ("\n" + "\n".join(detail)) if detail else ""
+        raise PluginError(
+            f"building the MuJoCo plugin failed: {' '.join(command)} exited {result.returncode}{tail}"
+        )
+
+
+def build_plugin(*, build_dir: str | os.PathLike[str] | None = None, quiet: bool = False) -> Path:
+    """Configure and build the plugin with CMake; return the path of the library.
+
+    Args:
+        build_dir: Build directory (default ``plugin/mujoco/build``).
+        quiet: Capture the compiler output and show it only on failure.
+
+    Raises:
+        PluginError: no cmake, no sources, no mujoco wheel, or the build failed.
+    """
+    source = plugin_source_dir()
+    if not (source / "CMakeLists.txt").is_file():
+        raise PluginError(
+            f"{source}: plugin sources not found (build from a source checkout of drive-envelope)"
+        )
+    cmake = shutil.which("cmake")
+    if cmake is None:
+        raise PluginError(
+            "building the MuJoCo plugin needs cmake >= 3.16 (apt install cmake, or pip install cmake)"
+        )
+    include, library, version = mujoco_paths()
+    out = Path(build_dir) if build_dir is not None else default_build_dir()
+    out.mkdir(parents=True, exist_ok=True)
+    configure = [
+        cmake,
+        "-S",
+        str(source),
+        "-B",
+        str(out),
+        "-DCMAKE_BUILD_TYPE=Release",
+        f"-DMUJOCO_INCLUDE_DIR={include}",
+        f"-DMUJOCO_LIBRARY={library}",
+        f"-DCMAKE_LIBRARY_OUTPUT_DIRECTORY={out.resolve()}",
+    ]
+    _run(configure, quiet)
+    _run([cmake, "--build", str(out), "--config", "Release", "--parallel", "2"], quiet)
+    built = out / library_name()
+    if not built.is_file():
+        raise PluginError(f"building the MuJoCo plugin produced no {built}")
+    info = {"mujoco_version": version, "mujoco_library": str(library), "library": library_name()}
+    atomic_write_text(out / BUILD_INFO, json.dumps(info, indent=2) + "\n")
+    return built
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line: build the plugin, print the library path; exit 2 with one line on failure."""
+    parser = argparse.ArgumentParser(
+        prog=BUILD_COMMAND, description=__doc__.splitlines()[0] if __doc__ else None
+    )
+    parser.add_argument("--build-dir", default=None, help="build directory (default: plugin/mujoco/build)")
+    parser.add_argument("--quiet", action="store_true", help="show compiler output only on failure")
+    args = parser.parse_args(argv)
+    try:
+        path = build_plugin(build_dir=args.build_dir, quiet=args.quiet)
+    except PluginError as exc:
+        print(f"drive-envelope: error: {exc}", file=sys.stderr)
+        return 2
+    print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,24 @@
+"""The ``mujoco`` engine: the test stand as a one-DOF MJCF model driven by the native plugin.
+
+See :mod:`drive_envelope._src.adapters.mujoco.stand` for the model. It needs the ``mujoco`` extra
+and the built plugin (``python -m drive_envelope._src.adapters.mujoco.build``).
+"""
+
+from __future__ import annotations
+
+from drive_envelope._src.teststand.scenario import Scenario
+from drive_envelope._src.teststand.trajectory import Trajectory
+
+__all__ = ["simulate"]
+
+
+def simulate(scenario: Scenario) -> Trajectory:
+    """Run ``scenario`` in MuJoCo with the ``drive_envelope.envelope`` plugin.
+
+    Raises:
+        PluginError: the plugin is not built or was built for another MuJoCo version (a
+            :class:`~drive_envelope.errors.DriveEnvelopeError`: the CLI prints one line).
+    """
+    from drive_envelope._src.adapters.mujoco.stand import simulate as run
+
+    return run(scenario)
