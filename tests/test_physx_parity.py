@@ -1,7 +1,9 @@
-"""Parity of the ``reference`` engine with real PhysX (ovphysx, CPU) on designed scenarios.
+"""Parity of the ``reference`` engine with real PhysX (ovphysx 0.7, CPU) on designed scenarios.
 
-Every scenario runs on both solvers (PGS and TGS); all of them step in one PhysX process (a
-module fixture) so the whole file takes a few seconds. Tolerances (per step, from the issue):
+Every scenario runs on both solvers (PGS and TGS), all of them in one module fixture. The plain
+drive (no envelope API, only maxForce) with an applied joint force is limited drive + applied
+TOGETHER to +-maxForce, as SEMANTICS.md states and the reference engine models (ovphysx 0.3.7
+clamped the drive alone; 0.7 agrees with the reference). Tolerances (per step, from the issue):
 velocity ``1e-5 + 5e-5*max|v|``, effort ``1e-4 + 1e-3*max_effort``, position
 ``1e-5 + 1e-4*path length``; stiff position steps braking on an envelope curve, where PhysX's float32
 rounding is amplified, allow ``1e-3*max|v|`` and ``2e-2*max_effort``.
@@ -9,16 +11,26 @@ rounding is amplified, allow ``1e-3*max|v|`` and ``2e-2*max_effort``.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from drive_envelope import PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import DriveSpec, JointSpec, LoadSpec, Scenario, SimulationSpec
+from drive_envelope._src.teststand.scenario import (
+    DriveSpec,
+    JointSpec,
+    LoadSpec,
+    Scenario,
+    SimulationSpec,
+    load_scenario,
+)
 
 pytestmark = [pytest.mark.physx, pytest.mark.usd]
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 _ENV = PerformanceEnvelope(
     max_effort=10.0, max_actuator_velocity=6.0, velocity_dependent_resistance=0.4, speed_effort_gradient=0.2
 )
@@ -126,7 +138,17 @@ def _cases(solver: str) -> list[tuple[Scenario, bool]]:
     ]
 
 
-CASES = _cases("pgs") + _cases("tgs")
+def _bundled_plain_drive() -> list[tuple[Scenario, bool]]:
+    """examples/scenarios/plain_drive_applied_effort.toml as shipped (PGS) and on TGS."""
+    scenario = load_scenario(EXAMPLES / "plain_drive_applied_effort.toml")
+    tgs = dataclasses.replace(scenario.simulation, solver="tgs")
+    return [
+        (dataclasses.replace(scenario, name="plain_drive_applied_effort[pgs]"), False),
+        (dataclasses.replace(scenario, name="plain_drive_applied_effort[tgs]", simulation=tgs), False),
+    ]
+
+
+CASES = _cases("pgs") + _cases("tgs") + _bundled_plain_drive()
 
 
 @pytest.fixture(scope="module")
@@ -140,22 +162,7 @@ def runs() -> dict[str, tuple[object, object, bool]]:
     return {s.name: (reference.simulate(s), r, stiff) for (s, stiff), r in zip(CASES, results, strict=True)}
 
 
-# ovphysx 0.3.7 (and omni.physx's PhysXUSDProperties.h toPhysX) gives a drive WITHOUT the envelope
-# API PhysX's legacy clamp, |drive| <= maxForce with the user joint force on top; the reference
-# engine limits drive + applied together (SEMANTICS.md). Strict: fixing either side must update this.
-_PLAIN_DRIVE = pytest.mark.xfail(
-    strict=True, reason="plain drive: PhysX clamps the drive alone to maxForce, the reference drive + applied"
-)
-
-
-def _params() -> list[object]:
-    return [
-        pytest.param(s.name, marks=_PLAIN_DRIVE) if s.name.startswith("plain_drive") else s.name
-        for s, _ in CASES
-    ]
-
-
-@pytest.mark.parametrize("name", _params())
+@pytest.mark.parametrize("name", [s.name for s, _ in CASES])
 def test_reference_matches_physx_every_step(runs: dict[str, tuple[object, object, bool]], name: str) -> None:
     """Match PhysX's position, velocity and effort at every step within the issue's tolerances."""
     ref, phx, stiff = runs[name]
@@ -185,3 +192,16 @@ def test_velocity_settles_on_max_actuator_velocity(runs: dict[str, tuple[object,
     """Settle PhysX's joint velocity on maxActuatorVelocity (the envelope read from USD)."""
     _, phx, _ = runs["velocity_saturation[pgs]"]
     assert phx.velocity[-1] == pytest.approx(6.0, rel=1e-6)  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize("solver", ["pgs", "tgs"])
+def test_plain_drive_limits_drive_and_applied_together(
+    runs: dict[str, tuple[object, object, bool]], solver: str
+) -> None:
+    """Hold drive + applied effort at maxForce 10 N*m on a plain drive (applied 15 N*m, drive -5)."""
+    _, phx, _ = runs[f"plain_drive_applied_effort[{solver}]"]
+    dt, inertia = 0.0083333333, 0.05
+    # first steps: the drive pulls the same way as the applied 15 N*m, the total is clamped to 10
+    # (the drive alone clamped to 10 with 15 on top would give 25 N*m and twice the speed gain)
+    np.testing.assert_allclose(phx.effort[1:4], 10.0, rtol=1e-6)  # type: ignore[attr-defined]
+    np.testing.assert_allclose(phx.velocity[1:4], 10.0 * dt / inertia * np.arange(1, 4), rtol=1e-5)  # type: ignore[attr-defined]

@@ -1,8 +1,10 @@
-"""PhysX itself reads back what ``drive_envelope.usd`` writes (real PhysX through ovphysx, CPU).
+"""PhysX itself reads back what ``drive_envelope.usd`` writes (real PhysX through ovphysx 0.7, CPU).
 
-maxForce and the drive gains are read from PhysX's own DOF tensors; the three envelope values,
-which ovphysx 0.3.7 has no tensor for, are read from PhysX's behaviour against closed forms
-(SEMANTICS.md): the velocity settles exactly on maxActuatorVelocity, the first step from rest
+maxForce, the drive gains and the three envelope values are read from PhysX's joint properties
+(ovphysx 0.7's ``ARTICULATION_JOINT`` attributes ``jointMaxForce``, ``jointStiffness``,
+``jointMaxActuatorVelocity``, ``jointVelocityDependentResistance``, ``jointSpeedEffortGradient``:
+live PhysX state, angular values folded back to degrees as USD stores them). The envelope is also
+read from PhysX's behaviour against closed forms (SEMANTICS.md): the velocity settles exactly on maxActuatorVelocity, the first step from rest
 exerts ``maxEffort / (1 + r*R*dt)``, and against a constant load ``L`` the speed settles on
 ``maxActuatorVelocity - speedEffortGradient*L``. They run in a centimetre-gram stage, so the
 degree conversion and the stage-unit scaling are both exercised (the parity tests use SI stages).
@@ -10,6 +12,7 @@ degree conversion and the stage-unit scaling are both exercised (the parity test
 
 from __future__ import annotations
 
+import math
 import shutil
 import warnings
 from pathlib import Path
@@ -80,24 +83,46 @@ def test_loaded_speed_reads_speed_effort_gradient(runs: list[object]) -> None:
     assert trajectory.effort[-1] == pytest.approx(2.0, rel=1e-4)  # type: ignore[attr-defined]
 
 
-def test_physx_loads_max_force_and_gains_of_applied_robot(tmp_path: Path) -> None:
-    """Load the example robot after ``usd apply`` and find maxForce and per-degree gains in SI."""
+@pytest.fixture(scope="module")
+def robot_dofs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, float]]:
+    """What PhysX loaded for the example robot after ``drive-envelope usd apply --map``."""
     from drive_envelope._src.cli.main import main
     from drive_envelope._src.usd.physx_runner import inspect_drives
 
-    (tmp_path / "usd").mkdir()
-    (tmp_path / "envelopes").mkdir()
+    folder = tmp_path_factory.mktemp("robot")
+    (folder / "usd").mkdir()
+    (folder / "envelopes").mkdir()
     for name in ("robot.usda", "map.toml", "linear_actuator.toml"):
-        shutil.copy(EXAMPLES / "usd" / name, tmp_path / "usd" / name)
-    shutil.copy(EXAMPLES / "envelopes" / "demo.toml", tmp_path / "envelopes" / "demo.toml")
-    robot, out = tmp_path / "usd" / "robot.usda", tmp_path / "robot_env.usda"
-    assert (
-        main(["usd", "apply", str(robot), "--map", str(robot.with_name("map.toml")), "--output", str(out)])
-        == 0
-    )
-    dofs = inspect_drives(out, "/Robot", workdir=tmp_path)
+        shutil.copy(EXAMPLES / "usd" / name, folder / "usd" / name)
+    shutil.copy(EXAMPLES / "envelopes" / "demo.toml", folder / "envelopes" / "demo.toml")
+    robot, out = folder / "usd" / "robot.usda", folder / "robot_env.usda"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        argv = ["usd", "apply", str(robot), "--map", str(robot.with_name("map.toml")), "--output", str(out)]
+        assert main(argv) == 0
+    return inspect_drives(out)
+
+
+def test_physx_loads_max_force_and_gains_of_applied_robot(robot_dofs: dict[str, dict[str, float]]) -> None:
+    """Find maxForce in stage units and the per-degree gains as authored in PhysX's joint properties."""
+    shoulder, slide = robot_dofs["/Robot/joints/shoulder"], robot_dofs["/Robot/joints/slide"]
     # centimetre stage: torques in kg*cm^2/s^2 (1e4 per N*m), forces in kg*cm/s^2 (100 per N)
-    assert dofs["shoulder"]["max_force"] / 1e4 == pytest.approx(12.05568, rel=1e-6)
-    assert dofs["slide"]["max_force"] / 1e2 == pytest.approx(120.0, rel=1e-6)
-    # the example writes stiffness 2 per degree on the shoulder: PhysX holds 2*180/pi per radian
-    assert dofs["shoulder"]["stiffness"] == pytest.approx(2.0 * 180.0 / 3.141592653589793, rel=1e-6)
+    assert shoulder["max_force"] / 1e4 == pytest.approx(12.05568, rel=1e-6)
+    assert slide["max_force"] / 1e2 == pytest.approx(120.0, rel=1e-6)
+    # ovphysx 0.7 reports angular gains per degree, as USD stores them (the example writes 2)
+    assert shoulder["stiffness"] == pytest.approx(2.0, rel=1e-6)
+
+
+def test_physx_loads_envelope_of_applied_robot(robot_dofs: dict[str, dict[str, float]]) -> None:
+    """Read the three envelope values back from PhysX's joint properties and convert them to SI."""
+    deg = math.pi / 180.0
+    shoulder, slide = robot_dofs["/Robot/joints/shoulder"], robot_dofs["/Robot/joints/slide"]
+    # demo.toml: 360 rpm = 37.699 rad/s, G = 0.570248 (rad/s)/(N*m) (see `drive-envelope usd show`);
+    # angular values come back per degree, torques in kg*cm^2/s^2 (1e4 per N*m)
+    assert shoulder["max_actuator_velocity"] * deg == pytest.approx(12.0 * math.pi, rel=1e-6)
+    assert shoulder["speed_effort_gradient"] * deg * 1e4 == pytest.approx(0.570248, rel=1e-5)
+    assert shoulder["velocity_dependent_resistance"] == 0.0
+    # linear_actuator.toml: 0.25 m/s = 25 cm/s; 40 N*s/m = 40 kg/s, the same number in kg-cm-s
+    assert slide["max_actuator_velocity"] == pytest.approx(25.0, rel=1e-6)
+    assert slide["velocity_dependent_resistance"] == pytest.approx(40.0, rel=1e-6)
+    assert slide["speed_effort_gradient"] == 0.0

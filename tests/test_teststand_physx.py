@@ -1,4 +1,7 @@
-"""The reference engine against real PhysX (ovphysx, CPU) on every bundled scenario.
+"""The reference engine against real PhysX (ovphysx 0.7, CPU) on every bundled scenario.
+
+``plain_drive_applied_effort`` (no envelope API) included: ovphysx 0.7 limits drive + applied joint
+force together to +-maxForce, as the reference does (ovphysx 0.3.7 clamped the drive alone).
 
 PhysX computes in float32, so agreement is to float32 precision amplified by the dynamics: the
 scenarios that brake along eq. 2 amplify 1e-6 noise about a thousandfold, hence the tolerance
@@ -21,9 +24,6 @@ from drive_envelope._src.teststand.trajectory import Trajectory
 pytestmark = [pytest.mark.physx, pytest.mark.usd, pytest.mark.slow]
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
-# found by running it: PhysX (ovphysx) applies the legacy drive-only clamp when no envelope API is
-# authored, so drive + applied effort is NOT limited together as the issue's semantics state
-PLAIN_DRIVE_WITH_APPLIED_EFFORT = "plain_drive_applied_effort"
 PATHS = sorted(EXAMPLES.glob("*.toml"))
 
 
@@ -41,12 +41,8 @@ def physx_runs() -> dict[str, Trajectory]:
 
 
 @pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
-def test_reference_matches_physx(
-    path: Path, physx_runs: dict[str, Trajectory], request: pytest.FixtureRequest
-) -> None:
-    """Position, velocity and effort of the reference engine match PhysX to float32-level precision."""
-    if path.stem == PLAIN_DRIVE_WITH_APPLIED_EFFORT:
-        request.applymarker(pytest.mark.xfail(reason="ovphysx clamps a drive without envelope API alone"))
+def test_reference_matches_physx(path: Path, physx_runs: dict[str, Trajectory]) -> None:
+    """Match the reference engine's position, velocity and effort to PhysX's at float32-level precision."""
     reference, physx = simulate(load_scenario(path)), physx_runs[path.stem]
     for column in ("position", "velocity", "effort"):
         ours, theirs = getattr(reference, column), getattr(physx, column)

@@ -1,51 +1,60 @@
-"""Run test-stand stages on real PhysX (the ``ovphysx`` wheel, CPU) in a child process.
+"""Run test-stand stages on real PhysX (the ``ovphysx`` 0.7 wheel, CPU) in this process.
 
-Why a child process: ovphysx fixes its device mode and loads its own OpenUSD (25.11) process-wide,
-which must not meet the ``pxr`` of usd-core that authors the stage; a child also keeps PhysX's
-logs, caches and any native crash away from the caller. The parent writes each stage with
-:mod:`drive_envelope._src.usd.teststand_scene`, lists the jobs in a JSON file and runs
-``python -m drive_envelope._src.usd.physx_runner JOBS.json RESULT.npz``; Warp's, Omniverse's and
-ovphysx's caches and logs go to a temporary folder (``HOME``, ``XDG_CACHE_HOME``,
-``WARP_CACHE_PATH``), never the repository or the user's home.
+ovphysx 0.7 reads USD through ovstage, whose OpenUSD build is namespaced apart from usd-core's
+``pxr``, so both live in one process (checked with usd-core 26.11 and ovstage 0.3: the stage is
+authored with ``pxr`` and handed over as USDA text). The first use sets ovphysx's process-wide
+state once: CPU-only mode (sticky for the process, as ovphysx defines it), the PhysX schemas
+from ``physx-usd-schemas`` registered with ovstage population, log level ERROR, and every cache
+(the Omniverse client cache, Warp's kernel cache, PhysX's cooked-collider cache) in
+``<tmp>/drive-envelope-ovphysx-<uid>``, never the repository or the user's home.
 
-Per step the child writes the applied joint effort (``ARTICULATION_DOF_ACTUATION_FORCE``) and the
-external load (a link torque about the joint axis, or a force along it, through
-``ARTICULATION_LINK_WRENCH``), steps, and reads the joint position and velocity (SI: the tensor
-API reports radians) and ``ARTICULATION_DOF_PROJECTED_JOINT_FORCE``: the joint force the solver
-applied over the step projected on the DOF, which is the total actuator effort (drive + applied);
-under TGS it also contains the external load, which the runner subtracts.
+Per step the runner writes the applied joint effort (``jointActuationForce``) and the external
+load (a link wrench: a torque about the joint axis, or a force along it), steps, and reads
+``jointPosition``, ``jointVelocity`` (degrees on revolute joints, converted to radians here) and
+``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF.
+That is the total actuator effort (drive + applied); under TGS it also contains the external
+load, which the runner subtracts.
 """
 
 from __future__ import annotations
 
-import json
+import contextlib
+import logging
+import math
 import os
-import subprocess
-import sys
 import tempfile
-from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope.errors import DriveEnvelopeError
+from drive_envelope._src.usd.teststand_scene import JOINT_PATH, LINK_PATH
+from drive_envelope.errors import DriveEnvelopeError, InputError
 
-__all__ = ["PhysxJob", "PhysxResult", "cache_environment", "inspect_drives", "run_jobs"]
+__all__ = ["PhysxJob", "PhysxResult", "cache_folder", "inspect_drives", "run_jobs"]
 
-_ARTICULATION = "/World/stand"
-_LINK = "/World/stand/link"
-_TIMEOUT_S = 600.0
+_INSPECTED = {
+    "max_force": "jointMaxForce",
+    "stiffness": "jointStiffness",
+    "damping": "jointDamping",
+    "max_actuator_velocity": "jointMaxActuatorVelocity",
+    "velocity_dependent_resistance": "jointVelocityDependentResistance",
+    "speed_effort_gradient": "jointSpeedEffortGradient",
+}
+_STATE = ("jointPosition", "jointVelocity", "jointProjectedForce")
+_ORDINAL = 1  # the one ovstage ordinal each stage is populated at and PhysX reads
+_ready = False  # ovphysx's process-wide set-up done
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class PhysxJob:
-    """One stage to step: what the child needs besides the USD file."""
+    """One stage to step: the authored stage and the per-step inputs."""
 
-    usd_path: str
-    """The stage (``.usda``) written by the parent."""
+    usda: str
+    """The stage as USDA text (authored with ``pxr``, populated into ovstage as is)."""
     joint: str
     """``"revolute"`` (axis Z) or ``"prismatic"`` (axis X)."""
     solver: str
@@ -61,8 +70,7 @@ class PhysxJob:
     applied_effort: float
     """Joint force commanded beside the drive, written every step [N*m or N]."""
     external_effort: float
-    """Load from outside the actuator, a link wrench written every step [N*m or N] (SI; the
-    child converts to stage units with ``effort_scale``)."""
+    """Load from outside the actuator, a link wrench written every step [N*m or N]."""
     effort_scale: float = 1.0
     """SI -> stage factor for efforts (1 for SI stages)."""
     length_scale: float = 1.0
@@ -81,169 +89,235 @@ class PhysxResult:
     """Total actuator effort over each step (``effort[0] = 0``) [N*m or N]."""
 
 
-def cache_environment(folder: str | os.PathLike[str]) -> dict[str, str]:
-    """Environment for the child with every cache and log folder inside ``folder``."""
-    env = dict(os.environ)
-    root = Path(folder)
-    for name in ("home", "cache", "warp"):
-        (root / name).mkdir(parents=True, exist_ok=True)
-    env.update(
-        HOME=str(root / "home"),
-        XDG_CACHE_HOME=str(root / "cache"),
-        WARP_CACHE_PATH=str(root / "warp"),
-        OMNI_KIT_ALLOW_ROOT="1",
-    )
-    return env
+def cache_folder() -> Path:
+    """Folder for ovphysx's, ovstage's and Warp's caches: one per user under the temp folder."""
+    owner = os.getuid() if hasattr(os, "getuid") else os.getpid()
+    return Path(tempfile.gettempdir()) / f"drive-envelope-ovphysx-{owner}"
 
 
-def _run_child(command: list[str], folder: Path) -> subprocess.CompletedProcess[str]:
-    """Run the child with its caches in ``folder``; a hung PhysX becomes an error, not a hang."""
+@contextlib.contextmanager
+def _environment(**values: str) -> Iterator[None]:
+    """Set environment variables for the block only (the libraries read them at initialisation)."""
+    saved = {key: os.environ.get(key) for key in values}
+    os.environ.update(values)
     try:
-        return subprocess.run(
-            command,
-            capture_output=True,
-            text=True,
-            env=cache_environment(folder / "caches"),
-            timeout=_TIMEOUT_S,
-            check=False,
-        )
-    except subprocess.TimeoutExpired:
-        raise DriveEnvelopeError(f"PhysX (ovphysx) did not finish within {_TIMEOUT_S:g} s") from None
+        yield
+    finally:
+        for key, old in saved.items():
+            if old is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = old
 
 
-def run_jobs(jobs: Sequence[PhysxJob], *, workdir: str | os.PathLike[str]) -> list[PhysxResult]:
-    """Step every job in one child process and return the samples, in order.
+def _prepare() -> Any:
+    """Import ovphysx and do its once-per-process set-up; returns the ``ovphysx`` module.
 
     Raises:
-        DriveEnvelopeError: the child failed (its last output lines are in the message).
+        DriveEnvelopeError: ovphysx or physx-usd-schemas is missing.
     """
-    folder = Path(workdir)
-    spec = folder / "jobs.json"
-    out = folder / "result.npz"
-    spec.write_text(json.dumps([asdict(job) for job in jobs]), encoding="utf-8")
-    command = [sys.executable, "-m", "drive_envelope._src.usd.physx_runner", str(spec), str(out)]
-    completed = _run_child(command, folder)
-    if completed.returncode != 0 or not out.is_file():
-        tail = "\n".join((completed.stdout + completed.stderr).strip().splitlines()[-15:])
-        raise DriveEnvelopeError(f"PhysX (ovphysx) run failed with status {completed.returncode}:\n{tail}")
-    with np.load(out) as data:
-        return [
-            PhysxResult(
-                position=data[f"position_{i}"].astype(np.float64),
-                velocity=data[f"velocity_{i}"].astype(np.float64),
-                effort=data[f"effort_{i}"].astype(np.float64),
-            )
-            for i in range(len(jobs))
-        ]
-
-
-def inspect_drives(
-    usd_path: str | os.PathLike[str], articulation: str, *, workdir: str | os.PathLike[str]
-) -> dict[str, dict[str, float]]:
-    """What PhysX loaded for each DOF of an articulation: ``{dof name: {max_force, stiffness, damping}}``.
-
-    Values are PhysX's own, after its USD parsing: radians for angular DOFs, stage units for
-    lengths and masses (divide by the :class:`~drive_envelope._src.usd.scale.StageUnits` factors
-    for SI).
-
-    Raises:
-        DriveEnvelopeError: the child failed.
-    """
-    folder = Path(workdir)
-    spec = folder / "inspect.json"
-    out = folder / "inspect_result.json"
-    spec.write_text(
-        json.dumps({"inspect": os.fspath(usd_path), "articulation": articulation}), encoding="utf-8"
-    )
-    command = [sys.executable, "-m", "drive_envelope._src.usd.physx_runner", str(spec), str(out)]
-    completed = _run_child(command, folder)
-    if completed.returncode != 0 or not out.is_file():
-        tail = "\n".join((completed.stdout + completed.stderr).strip().splitlines()[-15:])
+    global _ready
+    try:
+        import ovphysx
+        import ovstage
+        from ovphysx.samples.python_samples.schema_support import physx_schema_paths
+    except ImportError as exc:
         raise DriveEnvelopeError(
-            f"PhysX (ovphysx) inspection failed with status {completed.returncode}:\n{tail}"
-        )
-    result: dict[str, dict[str, float]] = json.loads(out.read_text(encoding="utf-8"))
+            f"the physx engine needs ovphysx 0.7 (pip install 'drive-envelope[physx]'): {exc}"
+        ) from None
+    if _ready:
+        return ovphysx
+    folder = cache_folder()
+    for name in ("cache", "warp", "cooked"):
+        (folder / name).mkdir(parents=True, exist_ok=True)
+    # the Omniverse client fixes its cache folder on the first ovstage call, Warp on its init
+    with _environment(XDG_CACHE_HOME=str(folder / "cache"), WARP_CACHE_PATH=str(folder / "warp")):
+        _init_warp()
+        ovphysx.set_log_level(ovphysx.LogLevel.ERROR)
+        with contextlib.suppress(RuntimeError):
+            # sticky per process; refused while another PhysX instance is alive, in which case
+            # the stage's enableGPUDynamics = false still keeps the stand on CPU dynamics
+            ovphysx.PhysX.set_cpu_mode(True)
+        with contextlib.suppress(RuntimeError):
+            ovphysx.set_global_config(ovphysx.GlobalConfigKey.NUM_THREADS, 0)  # one small scene
+            ovphysx.set_global_config(
+                ovphysx.GlobalConfigKey.COOKED_COLLIDER_CACHE_DIRECTORY, str(folder / "cooked")
+            )
+        try:
+            ovstage.population.register_usd_schemas([str(path) for path in physx_schema_paths()])
+        except FileNotFoundError as exc:
+            raise DriveEnvelopeError(f"the physx engine needs physx-usd-schemas: {exc}") from None
+    _ready = True
+    return ovphysx
+
+
+def _init_warp() -> None:
+    """Initialise Warp quietly (ovphysx returns Warp arrays) unless the caller already did."""
+    import warp as wp
+
+    if getattr(wp._src.context, "runtime", None) is not None:  # keep the caller's Warp set-up
+        return
+    level = wp.config.log_level
+    wp.config.log_level = max(level, logging.WARNING)  # no "Warp initialized" banner on stdout
+    try:
+        wp.init()
+    finally:
+        wp.config.log_level = level
+
+
+@contextlib.contextmanager
+def _attached(ovphysx: Any, *, usda: str | None = None, path: str | None = None) -> Iterator[Any]:
+    """A PhysX instance with one stage (USDA text or a file) populated and attached."""
+    import ovstage
+
+    physx = ovphysx.PhysX()
+    stage = ovstage.Stage("drive-envelope")
+    attached = False
+    try:
+        domains = ovstage.PopulationDomain.ALL  # ALL resolves nested world transforms (ovstage 0.3)
+        if usda is not None:
+            ovstage.population.open_usd_from_string(stage, usda, ordinal=_ORDINAL, domains=domains)
+        else:
+            ovstage.population.open_usd(stage, str(path), ordinal=_ORDINAL, domains=domains)
+        stage.advance_write_floor(ordinal=_ORDINAL).wait()
+        physx.wait_task(physx.attach_ovstage(stage, read_ordinal=_ORDINAL))
+        attached = True
+        yield physx
+    finally:
+        try:
+            if attached:
+                physx.wait_task(physx.detach_ovstage())
+        finally:
+            physx.destroy()
+            stage.destroy()
+
+
+def run_jobs(jobs: Sequence[PhysxJob]) -> list[PhysxResult]:
+    """Step every job on PhysX and return the samples, in order.
+
+    Raises:
+        DriveEnvelopeError: ovphysx is missing or PhysX failed.
+    """
+    ovphysx = _prepare()
+    results = []
+    for job in jobs:
+        try:
+            with _attached(ovphysx, usda=job.usda) as physx:
+                results.append(_step_job(physx, job))
+        except (RuntimeError, ValueError) as exc:  # TaskError is a RuntimeError
+            raise DriveEnvelopeError(f"PhysX (ovphysx) failed: {' '.join(str(exc).split())[:400]}") from exc
+    return results
+
+
+def inspect_drives(usd_path: str | os.PathLike[str]) -> dict[str, dict[str, float]]:
+    """What PhysX loaded for every articulation DOF of a USD file, in PhysX's units.
+
+    Returns:
+        ``{joint path: {max_force, stiffness, damping, max_actuator_velocity,
+        velocity_dependent_resistance, speed_effort_gradient}}`` (a joint with several free axes
+        gets ``path[axis]`` keys). Values are PhysX's after its USD parsing, as ovphysx reports
+        them: angular DOFs per degree (deg/s, N*m*s/deg, (deg/s)/(N*m), stiffness per degree),
+        lengths and masses in stage units. Divide by the
+        :class:`~drive_envelope._src.usd.scale.StageUnits` factors for SI.
+
+    Raises:
+        InputError: the file does not exist.
+        DriveEnvelopeError: ovphysx is missing or PhysX failed.
+    """
+    if not Path(usd_path).is_file():
+        raise InputError(f"{os.fspath(usd_path)}: no such file")
+    ovphysx = _prepare()
+    result: dict[str, dict[str, float]] = {}
+    try:
+        with _attached(ovphysx, path=os.fspath(usd_path)) as physx:
+            columns = _read_joints(physx, list(_INSPECTED.values()))
+            for column, attribute in _INSPECTED.items():
+                for joint, values in columns[attribute].items():
+                    for axis, value in enumerate(values):
+                        key = joint if len(values) == 1 else f"{joint}[{axis}]"
+                        result.setdefault(key, {})[column] = float(value)
+    except (RuntimeError, ValueError) as exc:
+        raise DriveEnvelopeError(f"PhysX (ovphysx) failed: {' '.join(str(exc).split())[:400]}") from exc
     return result
 
 
-# -- the child ----------------------------------------------------------------------------------------
+# -- stepping -----------------------------------------------------------------------------------------
 
 
-def _link_index(names: list[str]) -> int:
-    """Index of the driven link among the articulation's bodies (names may be paths)."""
-    leaf = _LINK.rsplit("/", 1)[-1]
-    for i, name in enumerate(names):
-        if str(name).rsplit("/", 1)[-1] == leaf:
-            return i
-    raise RuntimeError(f"link {_LINK} not among the articulation bodies {names}")
+def _read_joints(
+    physx: Any, attributes: Sequence[str], pattern: str | None = None
+) -> dict[str, dict[str, npt.NDArray[np.float64]]]:
+    """``ARTICULATION_JOINT`` attributes of every (or the matching) joint: ``{attribute: {path: axes}}``."""
+    from ovphysx.types import SimObjectType
+
+    values: dict[str, dict[str, npt.NDArray[np.float64]]] = {name: {} for name in attributes}
+    with physx.read_sync(SimObjectType.ARTICULATION_JOINT, list(attributes), pattern=pattern) as result:
+        paths = result.dictionary
+        names = {paths.intern_token(name): name for name in attributes}
+        for group in result.groups:
+            joints = paths.get_path_strings(group.prim_list)
+            # one array group per attribute: tensors[i] holds joint i's axes (not one group per joint)
+            column = values[names[group.attribute]]
+            for i, tensor in enumerate(group.tensors):
+                column[str(joints[group.prim_offset + i])] = np.asarray(tensor.numpy(), dtype=np.float64)
+    return values
 
 
-def _step_job(physx: Any, job: dict[str, Any]) -> dict[str, npt.NDArray[np.float64]]:
-    """Load one stage, step it and sample it; the stage is removed afterwards."""
-    from ovphysx.types import TensorType
+def _write(physx: Any, object_type: Any, attribute: str, pattern: str, row: npt.NDArray[np.float32]) -> None:
+    """Write one attribute of the prims matching ``pattern``: every tensor gets ``row``."""
+    written = 0
+    with physx.write_sync(object_type, [attribute], pattern=pattern) as session:
+        for group in session.groups:
+            for tensor in group.tensors:  # fill every tensor: a commit publishes the whole group
+                tensor.assign(np.broadcast_to(row, tuple(tensor.shape)).astype(np.float32))
+            session.commit_sync(group)
+            written += len(group.tensors)
+    if written == 0:
+        raise RuntimeError(f"no {attribute} to write at {pattern}")
 
-    handle, _ = physx.add_usd(job["usd_path"])
-    physx.wait_all()
-    try:
 
-        def binding(pattern: str, tensor_type: Any) -> Any:
-            return physx.create_tensor_binding(pattern=pattern, tensor_type=tensor_type)
+def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
+    """Set the initial state, then write the inputs, step and sample ``job.steps`` times."""
+    from ovphysx.types import SimObjectType
 
-        pos = binding(_ARTICULATION, TensorType.ARTICULATION_DOF_POSITION)
-        vel = binding(_ARTICULATION, TensorType.ARTICULATION_DOF_VELOCITY)
-        force = binding(_ARTICULATION, TensorType.ARTICULATION_DOF_ACTUATION_FORCE)
-        projected = binding(_ARTICULATION, TensorType.ARTICULATION_DOF_PROJECTED_JOINT_FORCE)
-        wrench = binding(_ARTICULATION, TensorType.ARTICULATION_LINK_WRENCH)
-        link_index = _link_index(list(wrench.body_names))
-        buffers = {
-            name: np.zeros(b.shape, dtype=np.float32)
-            for name, b in (("q", pos), ("v", vel), ("f", force), ("p", projected))
-        }
-        length = 1.0 if job["joint"] == "revolute" else float(job["length_scale"])
-        buffers["q"][:] = job["initial_position"] * length
-        buffers["v"][:] = job["initial_velocity"] * length
-        pos.write(buffers["q"])
-        vel.write(buffers["v"])
-        applied = np.full(force.shape, job["applied_effort"] * job["effort_scale"], dtype=np.float32)
-        load = np.zeros(wrench.shape, dtype=np.float32)
-        load[0, link_index, 5 if job["joint"] == "revolute" else 0] = (
-            job["external_effort"] * job["effort_scale"]
-        )
-        steps = int(job["steps"])
-        samples = {key: np.zeros(steps + 1) for key in ("position", "velocity", "effort")}
-        pos.read(buffers["q"])
-        vel.read(buffers["v"])
-        samples["position"][0], samples["velocity"][0] = buffers["q"][0, 0], buffers["v"][0, 0]
-        dt = float(job["dt"])
-        for i in range(1, steps + 1):
-            force.write(applied)
-            if job["external_effort"] != 0.0:
-                wrench.write(load)
-            physx.step(dt, (i - 1) * dt)
-            physx.wait_all()
-            pos.read(buffers["q"])
-            vel.read(buffers["v"])
-            projected.read(buffers["p"])
-            samples["position"][i] = buffers["q"][0, 0]
-            samples["velocity"][i] = buffers["v"][0, 0]
-            samples["effort"][i] = buffers["p"][0, 0]
-        if job["solver"] == "tgs":
-            # TGS (external forces every substep) reports the total generalized force on the DOF,
-            # the external load included; PGS reports the joint's own force (measured, ovphysx 0.3.7)
-            samples["effort"][1:] -= load[0, link_index, 5 if job["joint"] == "revolute" else 0]
-        if job["joint"] == "revolute":
-            samples["position"] = _unwrap(samples["position"], samples["velocity"], dt)
-        # back to SI: angles are radians in every stage, lengths and efforts are in stage units
-        length = 1.0 if job["joint"] == "revolute" else float(job["length_scale"])
-        samples["position"] /= length
-        samples["velocity"] /= length
-        samples["effort"] /= float(job["effort_scale"])
-        for b in (pos, vel, force, projected, wrench):
-            b.destroy()
-        return samples
-    finally:
-        physx.remove_usd(handle)
-        physx.wait_all()
+    joint_type, link_type = SimObjectType.ARTICULATION_JOINT, SimObjectType.ARTICULATION_LINK
+    revolute = job.joint == "revolute"
+    # PhysX's first step initialises its structures (a 1 ns step); done here, before the initial
+    # state is written, rather than implicitly at the first write
+    physx.warmup()
+    # revolute DOFs are read and written in degrees, prismatic ones in stage lengths
+    coordinate = math.degrees(1.0) if revolute else job.length_scale
+    _write(physx, joint_type, "jointPosition", JOINT_PATH, np.float32([job.initial_position * coordinate]))
+    _write(physx, joint_type, "jointVelocity", JOINT_PATH, np.float32([job.initial_velocity * coordinate]))
+    physx.update_articulations_kinematic(pattern=JOINT_PATH.rsplit("/", 1)[0])
+    applied = np.float32([job.applied_effort * job.effort_scale])
+    load = job.external_effort * job.effort_scale
+    # [force xyz, torque xyz, world point]: a torque about Z, or a force along X through the
+    # origin, which lies on the prismatic axis, so the force adds no torque
+    wrench = np.zeros(9, dtype=np.float32)
+    wrench[5 if revolute else 0] = load
+    samples = np.zeros((3, job.steps + 1))
+    samples[:2, 0] = _sample(physx, _STATE[:2])
+    for i in range(1, job.steps + 1):
+        _write(physx, joint_type, "jointActuationForce", JOINT_PATH, applied)
+        if load != 0.0:
+            _write(physx, link_type, "wrench", LINK_PATH, wrench)
+        physx.step_sync(job.dt)
+        samples[:, i] = _sample(physx, _STATE)
+    position, velocity, effort = samples / np.array([[coordinate], [coordinate], [job.effort_scale]])
+    if job.solver == "tgs":
+        # TGS (external forces every substep) reports the total generalized force on the DOF, the
+        # external load included; PGS reports the joint's own force (measured, ovphysx 0.3.7 and 0.7)
+        effort[1:] -= job.external_effort
+    if revolute:
+        position = _unwrap(position, velocity, job.dt)
+    return PhysxResult(position=position, velocity=velocity, effort=effort)
+
+
+def _sample(physx: Any, attributes: Sequence[str]) -> list[float]:
+    """The stand joint's single-axis values of some attributes, in ovphysx's units."""
+    values = _read_joints(physx, attributes, JOINT_PATH)
+    return [float(values[name][JOINT_PATH][0]) for name in attributes]
 
 
 def _unwrap(
@@ -260,59 +334,3 @@ def _unwrap(
         predicted = result[i - 1] + velocity[i] * dt
         result[i] += turn * np.round((predicted - position[i]) / turn)
     return result
-
-
-def _inspect(physx: Any, request: dict[str, str], out: str) -> None:
-    """Write PhysX's per-DOF drive values of one articulation as JSON."""
-    from ovphysx.types import TensorType
-
-    physx.add_usd(request["inspect"])
-    physx.wait_all()
-    columns = {
-        "max_force": TensorType.ARTICULATION_DOF_MAX_FORCE,
-        "stiffness": TensorType.ARTICULATION_DOF_STIFFNESS,
-        "damping": TensorType.ARTICULATION_DOF_DAMPING,
-    }
-    result: dict[str, dict[str, float]] = {}
-    for column, tensor_type in columns.items():
-        binding = physx.create_tensor_binding(pattern=request["articulation"], tensor_type=tensor_type)
-        values = np.zeros(binding.shape, dtype=np.float32)
-        binding.read(values)
-        for j, name in enumerate(binding.dof_names):
-            result.setdefault(str(name), {})[column] = float(values[0, j])
-        binding.destroy()
-    Path(out).write_text(json.dumps(result), encoding="utf-8")
-
-
-def _main(argv: Sequence[str]) -> int:
-    """Child entry point: ``physx_runner JOBS.json RESULT.npz`` (or an inspection request)."""
-    spec, out = argv
-    jobs = json.loads(Path(spec).read_text(encoding="utf-8"))
-    import ovphysx
-
-    ovphysx.set_log_level(ovphysx.LogLevel.ERROR)
-    # one scene with one articulation: worker threads only add contention on small machines
-    physx = ovphysx.PhysX(
-        device="cpu", config=ovphysx.PhysXConfig(num_threads=0, disable_contact_processing=True)
-    )
-    if isinstance(jobs, dict):
-        try:
-            _inspect(physx, jobs, out)
-        finally:
-            physx.release()
-        return 0
-    arrays: dict[str, npt.NDArray[np.float64]] = {}
-    try:
-        for i, job in enumerate(jobs):
-            for key, values in _step_job(physx, job).items():
-                arrays[f"{key}_{i}"] = values
-    finally:
-        physx.release()
-    with tempfile.NamedTemporaryFile(dir=Path(out).parent, suffix=".npz", delete=False) as tmp:
-        np.savez(tmp, **arrays)  # type: ignore[arg-type]
-    os.replace(tmp.name, out)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(_main(sys.argv[1:]))

@@ -274,6 +274,7 @@ def add_drives(
         PluginError: the plugin library is missing or stale.
     """
     import mujoco
+
     from drive_envelope._src.adapters.mujoco.loader import load_plugin
 
     load_plugin()

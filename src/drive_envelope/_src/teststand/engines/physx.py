@@ -14,9 +14,7 @@ PhysX computes in float32: expect agreement with ``reference`` to float32 precis
 from __future__ import annotations
 
 import math
-import tempfile
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -52,29 +50,27 @@ def simulate_many(scenarios: Sequence[Scenario], *, units: StageUnits | None = N
     from drive_envelope._src.usd.teststand_scene import build_teststand_stage
 
     units = units or StageUnits()
-    with tempfile.TemporaryDirectory(prefix="drive-envelope-physx-") as folder:
-        jobs = []
-        for i, scenario in enumerate(scenarios):
-            _check(scenario)
-            usd_path = Path(folder) / f"stand_{i}.usda"
-            build_teststand_stage(scenario, usd_path, units=units)
-            inst = "angular" if scenario.joint.type == "revolute" else "linear"
-            jobs.append(
-                PhysxJob(
-                    usd_path=str(usd_path),
-                    joint=scenario.joint.type,
-                    solver=scenario.simulation.solver,
-                    dt=scenario.simulation.dt,
-                    steps=scenario.simulation.steps,
-                    initial_position=scenario.joint.initial_position,
-                    initial_velocity=scenario.joint.initial_velocity,
-                    applied_effort=scenario.load.applied_effort,
-                    external_effort=scenario.load.external_effort,
-                    effort_scale=units.effort(inst),
-                    length_scale=units.length(),
-                )
+    jobs = []
+    for scenario in scenarios:
+        _check(scenario)
+        stage = build_teststand_stage(scenario, units=units)
+        inst = "angular" if scenario.joint.type == "revolute" else "linear"
+        jobs.append(
+            PhysxJob(
+                usda=stage.GetRootLayer().ExportToString(),
+                joint=scenario.joint.type,
+                solver=scenario.simulation.solver,
+                dt=scenario.simulation.dt,
+                steps=scenario.simulation.steps,
+                initial_position=scenario.joint.initial_position,
+                initial_velocity=scenario.joint.initial_velocity,
+                applied_effort=scenario.load.applied_effort,
+                external_effort=scenario.load.external_effort,
+                effort_scale=units.effort(inst),
+                length_scale=units.length(),
             )
-        results = run_jobs(jobs, workdir=folder)
+        )
+    results = run_jobs(jobs)
     return [_trajectory(scenario, result) for scenario, result in zip(scenarios, results, strict=True)]
 
 
