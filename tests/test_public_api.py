@@ -50,17 +50,37 @@ def test_every_exported_name_exists(name: str) -> None:
     assert hasattr(drive_envelope, name)
 
 
-def test_public_modules_export_what_they_define() -> None:
-    """Resolve every name in each light public module's __all__."""
-    for module_name in (
-        "drive_envelope.units",
-        "drive_envelope.io",
-        "drive_envelope.params",
-        "drive_envelope.errors",
-    ):
-        module = importlib.import_module(module_name)
-        for name in module.__all__:
-            assert hasattr(module, name), f"{module_name}.{name}"
+PUBLIC_MODULES = sorted(
+    f"drive_envelope.{path.stem}"
+    for path in (Path(drive_envelope.__file__).parent).glob("*.py")
+    if not path.stem.startswith("_")
+)
+SNAPSHOT = Path(__file__).parent / "golden" / "public_api.json"
+
+
+def _public_api() -> dict[str, list[str]]:
+    return {name: sorted(importlib.import_module(name).__all__) for name in PUBLIC_MODULES}
+
+
+@pytest.mark.parametrize("module_name", PUBLIC_MODULES)
+def test_public_module_exports_what_it_defines(module_name: str) -> None:
+    """Resolve every name in each public module's __all__."""
+    module = importlib.import_module(module_name)
+    for name in module.__all__:
+        assert hasattr(module, name), f"{module_name}.{name}"
+
+
+def test_public_api_snapshot() -> None:
+    """Keep every public module's __all__ equal to the reviewed snapshot (update it on purpose)."""
+    assert _public_api() == json.loads(SNAPSHOT.read_text(encoding="utf-8")), (
+        "public API changed: review, then regenerate tests/golden/public_api.json"
+    )
+
+
+@pytest.mark.parametrize("module_name", PUBLIC_MODULES)
+def test_public_module_import_is_light(module_name: str) -> None:
+    """Import each public module (engine adapters too) without loading any engine package."""
+    assert _loaded_heavy(f"import {module_name}") == []
 
 
 def test_import_is_light() -> None:

@@ -1,0 +1,179 @@
+"""Entry points of the analysis: check a log against envelopes, fit an envelope to a log or a curve."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope._src.analysis.check import CheckOptions, CheckReport, JointCheck, check_chunks
+from drive_envelope._src.analysis.curve import read_curve
+from drive_envelope._src.analysis.fit import FitOptions, FitResult, fit_samples
+from drive_envelope._src.analysis.logs import (
+    DEFAULT_CHUNK_ROWS,
+    LogChunk,
+    LogColumns,
+    ReadEngine,
+    iter_log,
+    read_log,
+    source_label,
+)
+from drive_envelope._src.analysis.mapping import (
+    JointMapping,
+    is_mapping_file,
+    load_joint_mapping,
+    resolve_spec,
+)
+from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope.errors import InputError
+
+__all__ = ["EnvelopeSource", "check_log", "check_samples", "fit_curve", "fit_log", "resolve_envelopes"]
+
+EnvelopeSource = (
+    PerformanceEnvelope | JointMapping | Mapping[str, PerformanceEnvelope] | str | os.PathLike[str]
+)
+"""One envelope for every joint, a per-joint mapping, or a spec: a joint mapping file, an envelope
+file, a datasheet file or a catalog actuator name."""
+
+
+def resolve_envelopes(spec: EnvelopeSource) -> PerformanceEnvelope | JointMapping:
+    """Turn an envelope source into one envelope or a :class:`JointMapping`.
+
+    Raises:
+        InputError: a file or name that cannot be resolved.
+    """
+    if isinstance(spec, (PerformanceEnvelope, JointMapping)):
+        return spec
+    if isinstance(spec, Mapping):
+        return JointMapping.from_envelopes(spec)
+    if is_mapping_file(spec):
+        return load_joint_mapping(spec)
+    return resolve_spec(os.fspath(spec))
+
+
+def check_log(
+    envelopes: EnvelopeSource,
+    log: Any,
+    *,
+    columns: LogColumns | None = None,
+    options: CheckOptions | None = None,
+    chunk_rows: int = DEFAULT_CHUNK_ROWS,
+    engine: ReadEngine = "auto",
+) -> CheckReport:
+    """Check every sample of a log against its joint's envelope, streaming in bounded memory.
+
+    Args:
+        envelopes: One envelope for all joints, a mapping joint name (or glob) -> envelope, or a
+            spec string (joint mapping file, envelope file, datasheet file, catalog name).
+        log: CSV or Parquet path, or an in-memory table (mapping of arrays, DataFrame, pyarrow Table).
+        columns: Column names; defaults ``time,velocity,effort`` (and ``joint`` when present).
+        options: Tolerance and thresholds.
+        chunk_rows: Rows read at a time (the memory bound).
+        engine: CSV reader: ``"auto"``, ``"pyarrow"`` or ``"python"``.
+
+    Returns:
+        The :class:`CheckReport`; ``report.passed`` applies ``options.tolerance``.
+
+    Raises:
+        InputError: unreadable envelope or log, missing column, bad cell (naming row and column),
+            a joint without envelope.
+    """
+    resolved = resolve_envelopes(envelopes)
+    chunks = iter_log(log, columns, chunk_rows=chunk_rows, engine=engine)
+    return check_chunks(chunks, resolved, options=options or CheckOptions(), source=source_label(log))
+
+
+def check_samples(
+    envelope: PerformanceEnvelope,
+    velocity: npt.ArrayLike,
+    effort: npt.ArrayLike,
+    *,
+    time: npt.ArrayLike | None = None,
+    options: CheckOptions | None = None,
+) -> JointCheck:
+    """Check one joint's samples (NumPy arrays) against an envelope.
+
+    Args:
+        envelope: The envelope (joint side, SI).
+        velocity: Joint velocity samples [rad/s or m/s].
+        effort: Effort samples [N*m or N].
+        time: Sample times [s], optional (needed for times on limits and of violations).
+        options: Thresholds.
+    """
+    table: dict[str, npt.ArrayLike] = {"velocity": velocity, "effort": effort}
+    if time is not None:
+        table["time"] = time
+    report = check_log(envelope, table, options=options)
+    return report.joints[0]
+
+
+def _select_joint(chunk: LogChunk, select: str | None, label: str) -> tuple[np.ndarray, np.ndarray]:
+    if chunk.joint is None:
+        if select is not None:
+            raise InputError(f"{label}: --select {select!r} needs a joint column in the log")
+        return chunk.velocity, chunk.effort
+    names = chunk.names
+    if select is None:
+        if len(names) > 1:
+            raise InputError(f"{label}: the log holds joints {', '.join(names)}; pick one with --select")
+        return chunk.velocity, chunk.effort
+    if select not in names:
+        raise InputError(f"{label}: --select {select!r}: no such joint (joints: {', '.join(names)})")
+    mask = chunk.joint == names.index(select)
+    return chunk.velocity[mask], chunk.effort[mask]
+
+
+def fit_log(
+    log: Any,
+    *,
+    columns: LogColumns | None = None,
+    options: FitOptions | None = None,
+    select: str | None = None,
+    engine: ReadEngine = "auto",
+) -> FitResult:
+    """Fit an envelope to the (velocity, effort) samples of a log of saturated operation.
+
+    Args:
+        log: CSV or Parquet path, or an in-memory table.
+        columns: Column names (defaults ``velocity``, ``effort``; ``joint`` when present).
+        options: Joint type, outlier quantile, fixed parameters, bootstrap.
+        select: Joint name to fit in a long-format log with several joints.
+        engine: CSV reader.
+
+    Raises:
+        InputError: unreadable log, several joints without ``select``, too few samples.
+    """
+    chunk = read_log(log, columns, engine=engine)
+    velocity, effort = _select_joint(chunk, select, source_label(log))
+    options = options or FitOptions()
+    if select and not options.name:
+        options = replace(options, name=select)
+    return fit_samples(velocity, effort, options)
+
+
+def fit_curve(
+    path: str | os.PathLike[str], *, columns: LogColumns | None = None, options: FitOptions | None = None
+) -> FitResult:
+    """Fit an envelope to points digitized from a datasheet's torque-speed diagram.
+
+    The points lie on the boundary by construction, so every point is kept (outlier quantile 0),
+    two points suffice per line, and no bootstrap is run: the residuals show the digitizing scatter.
+
+    Args:
+        path: CSV of points; units in brackets after the column names (``speed [rpm]``).
+        columns: Column names; ``speed``/``torque``/``force`` are accepted by default.
+        options: Joint type, fixed parameters, name (the outlier quantile and bootstrap are ignored).
+    """
+    options = options or FitOptions()
+    velocity, effort = read_curve(path, columns=columns, joint=options.joint)
+    curve_options = replace(options, outlier_quantile=0.0, bootstrap=0, min_segment_samples=2)
+    if not curve_options.name:
+        curve_options = replace(curve_options, name=Path(path).stem)
+    result = fit_samples(velocity, effort, curve_options)
+    note = "digitized curve: every point kept, no bootstrap; the residuals show the digitizing scatter"
+    return replace(result, notes=(*result.notes, note))

@@ -1,0 +1,118 @@
+"""Reading points digitized from a datasheet's operating diagram (a torque-speed curve).
+
+The file is a small CSV with a header. A column's unit may follow its name in brackets or
+parentheses, as digitizing tools and datasheets write them (``speed [rpm]``, ``torque (mNm)``); a
+column without a unit is SI. The points must be joint side: convert motor-side curves through the
+gear first (speed / ratio, torque * ratio * efficiency).
+
+    speed [rpm],torque [mNm]
+    0,820
+    2500,760
+    ...
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope._src.analysis.logs import LogColumns
+from drive_envelope._src.envelope.model import JointType
+from drive_envelope._src.params.table import si_unit
+from drive_envelope._src.units import to_si
+from drive_envelope.errors import InputError
+
+__all__ = ["EFFORT_ALIASES", "VELOCITY_ALIASES", "read_curve"]
+
+FloatArray = npt.NDArray[np.float64]
+VELOCITY_ALIASES = ("velocity", "speed", "omega", "v")
+"""Column names accepted for the velocity of a curve when the default column name is absent."""
+EFFORT_ALIASES = ("effort", "torque", "force", "tau")
+"""Column names accepted for the effort of a curve when the default column name is absent."""
+
+_HEADER = re.compile(r"^\s*(?P<name>[^\[\(]*?)\s*(?:[\[\(](?P<unit>[^\]\)]*)[\]\)])?\s*$")
+
+
+def _split_header(cell: str) -> tuple[str, str]:
+    match = _HEADER.match(cell)
+    if match is None:  # pragma: no cover - the pattern matches any string
+        return cell.strip(), ""
+    return match.group("name").strip().lower(), (match.group("unit") or "").strip()
+
+
+def _find(
+    names: list[str], wanted: str, aliases: tuple[str, ...], default: str, label: str, flag: str
+) -> int:
+    candidates = [wanted.lower()] + (list(aliases) if wanted == default else [])
+    for candidate in candidates:
+        if candidate in names:
+            return names.index(candidate)
+    raise InputError(f"{label}: no column {wanted!r} (columns: {', '.join(names)}); name it with {flag}")
+
+
+def read_curve(
+    path: str | os.PathLike[str], *, columns: LogColumns | None = None, joint: JointType = "revolute"
+) -> tuple[FloatArray, FloatArray]:
+    """Read digitized curve points and convert them to SI, joint side.
+
+    Args:
+        path: CSV file with a header; units in brackets after the column names.
+        columns: Column names (``velocity`` and ``effort``); with the defaults, ``speed``/``torque``/
+            ``force`` are accepted too.
+        joint: Joint type, which fixes the SI units: rad/s and N*m, or m/s and N.
+
+    Returns:
+        ``(velocity [rad/s or m/s], effort [N*m or N])``.
+
+    Raises:
+        InputError: missing file or column, an unknown unit, a cell that is not a number.
+    """
+    columns = columns or LogColumns()
+    file = Path(path)
+    label = str(file)
+    try:
+        with open(file, encoding="utf-8-sig", newline="") as handle:
+            rows = [
+                row for row in csv.reader(line for line in handle if not line.lstrip().startswith("#")) if row
+            ]
+    except FileNotFoundError:
+        raise InputError(f"{label}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{label}: cannot read: {exc}") from None
+    if not rows:
+        raise InputError(
+            f"{label}: empty file (expected a header such as 'speed [rpm],torque [mNm]' and points)"
+        )
+    header = [_split_header(cell) for cell in rows[0]]
+    names = [name for name, _ in header]
+    v_col = _find(
+        names, columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
+    )
+    e_col = _find(names, columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
+    scales = []
+    for col, field in ((v_col, "max_actuator_velocity"), (e_col, "max_effort")):
+        name, unit = header[col]
+        expected = si_unit(field, joint)
+        scales.append(to_si(f"1 {unit}", expected, f"{label}: column {name!r}") if unit else 1.0)
+    values = np.empty((len(rows) - 1, 2))
+    for row_number, row in enumerate(rows[1:], start=1):
+        for out, col in enumerate((v_col, e_col)):
+            cell = row[col] if col < len(row) else ""
+            try:
+                values[row_number - 1, out] = float(cell)
+            except ValueError:
+                what = "an empty cell" if not cell.strip() else repr(cell)
+                raise InputError(
+                    f"{label}: row {row_number}, column {names[col]!r}: got {what}; expected a number"
+                ) from None
+    if not np.isfinite(values).all():
+        bad = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
+        raise InputError(f"{label}: row {bad + 1}: NaN or infinite value; expected finite numbers")
+    if values.shape[0] < 3:
+        raise InputError(f"{label}: {values.shape[0]} points; a curve needs at least 3")
+    return values[:, 0] * scales[0], values[:, 1] * scales[1]

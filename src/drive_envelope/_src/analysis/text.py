@@ -1,0 +1,162 @@
+"""Plain-text reports of checks and fits for the command line, and the optional violation plot."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from drive_envelope._src.analysis.check import CheckReport, JointCheck, MarginSummary
+from drive_envelope._src.analysis.fit import FitResult
+from drive_envelope._src.cli.common import format_table, format_value
+from drive_envelope._src.params.table import si_unit
+from drive_envelope.errors import InputError
+
+__all__ = ["format_check", "format_fit", "plot_check"]
+
+_CURVE_TITLES = {"effort": "eq. 1 effort", "velocity": "eq. 2 velocity"}
+
+
+def _percent(fraction: float) -> str:
+    return f"{100.0 * fraction:.3g} %"
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.6g} s"
+
+
+def _where(check: JointCheck) -> str:
+    worst = check.worst
+    if worst is None:
+        return "no sample outside"
+    unit = check.effort.unit if worst.curve == "effort" else (check.velocity.unit if check.velocity else "")
+    at = f"t = {worst.time:.6g} s, " if worst.time is not None else ""
+    return (
+        f"worst: {_CURVE_TITLES[worst.curve]} exceeded by {format_value(worst.excess, unit)} "
+        f"({_percent(worst.relative)} of the cap) at {at}row {worst.row}: "
+        f"velocity {worst.velocity:.6g}, effort {worst.effort:.6g}"
+    )
+
+
+def _margin_row(summary: MarginSummary) -> list[str]:
+    quantiles = dict(summary.quantiles)
+    return [
+        f"{_CURVE_TITLES[summary.curve]} [{summary.unit}]",
+        format_value(summary.minimum),
+        format_value(quantiles[0.01]),
+        format_value(quantiles[0.05]),
+        format_value(quantiles[0.5]),
+        str(summary.samples_on_limit),
+        _seconds(summary.time_on_limit),
+        str(summary.samples_outside),
+    ]
+
+
+def format_check(report: CheckReport) -> str:
+    """The check report as text: one block per joint, then the verdict."""
+    options = report.options
+    lines = [
+        f"{report.source}: {len(report.joints)} joint(s); outside = margin < -{options.slack:g} of the cap, "
+        f"on limit = |margin| <= {options.limit_band:g} of the cap"
+    ]
+    header = ["curve (margin)", "min", "p1", "p5", "median", "on limit", "time on limit", "outside"]
+    for check in report.joints:
+        status = "ok" if check.fraction_outside <= options.tolerance else "FAIL"
+        duration = "" if check.duration is None else f" over {check.duration:.6g} s"
+        lines.append("")
+        lines.append(
+            f"joint {check.joint!r}: {check.samples} samples{duration}, {check.samples_outside} outside "
+            f"({_percent(check.fraction_outside)}) -> {status}"
+        )
+        rows = [_margin_row(check.effort)]
+        if check.velocity is not None:
+            rows.append(_margin_row(check.velocity))
+        lines.append(format_table(header, rows))
+        if check.velocity is None:
+            lines.append("eq. 2 not checked: max_actuator_velocity is inf")
+        lines.append(_where(check))
+    verdict = "PASSED" if report.passed else "FAILED"
+    lines.append("")
+    lines.append(f"{verdict}: tolerance {_percent(options.tolerance)} of samples outside per joint")
+    return "\n".join(lines)
+
+
+def format_fit(result: FitResult) -> str:
+    """The fit as text: parameters with uncertainties, residuals and notes."""
+    rows = []
+    for p in result.parameters:
+        interval = "-" if p.interval is None else f"[{p.interval[0]:.6g}, {p.interval[1]:.6g}]"
+        rows.append(
+            [
+                p.name,
+                format_value(p.value),
+                "-" if p.std is None else f"{p.std:.3g}",
+                interval,
+                p.unit,
+                p.status,
+            ]
+        )
+    env = result.envelope
+    lines = [
+        f"fitted envelope ({env.joint}) from {result.samples} samples, {result.samples_outside} outside",
+        format_table(["parameter", "value", "std", "95 % interval", "unit", "status"], rows),
+        "",
+        "residuals (positive: outside the fitted line)",
+    ]
+    residual_rows = []
+    for label, values, unit in (
+        ("eq. 1 effort", result.effort_residuals, si_unit("max_effort", env.joint)),
+        ("eq. 2 velocity", result.velocity_residuals, si_unit("max_actuator_velocity", env.joint)),
+    ):
+        if values.size:
+            rms = math.sqrt(float((values**2).mean()))
+            residual_rows.append(
+                [f"{label} [{unit}]", str(values.size), format_value(rms), format_value(float(values.max()))]
+            )
+        else:
+            residual_rows.append([f"{label} [{unit}]", "0", "-", "-"])
+    lines.append(format_table(["line", "samples", "rms", "max"], residual_rows))
+    lines.extend(f"note: {note}" for note in result.notes)
+    return "\n".join(lines)
+
+
+def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
+    """Write one envelope plot per joint with its violations in red; return the files written.
+
+    With one joint the plot goes to ``path``; with several, to ``<stem>-<joint><suffix>`` beside it.
+
+    Raises:
+        InputError: matplotlib is missing, no points were kept, or an unsupported suffix.
+    """
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
+
+    from drive_envelope._src.plots.figure import plot_envelope, save_figure
+    from drive_envelope._src.teststand.trajectory import Trajectory
+
+    target = Path(path)
+    written = []
+    for check in report.joints:
+        points = check.points
+        if points is None:
+            raise InputError("plot: the check kept no points (CheckOptions.keep_points = 0)")
+        trajectory = Trajectory(
+            time=points.time,
+            position=points.time * 0.0,
+            velocity=points.velocity,
+            effort=points.effort,
+            joint=check.envelope.joint,
+            name=check.joint,
+        )
+        figure = Figure(figsize=(7.0, 6.4), layout="constrained")
+        axes = figure.add_subplot(111)
+        plot = plot_envelope(
+            check.envelope, trajectory=trajectory, ax=axes, highlight=points.outside, title=check.joint
+        )
+        safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in check.joint)
+        out = target if len(report.joints) == 1 else target.with_name(f"{target.stem}-{safe}{target.suffix}")
+        save_figure(plot, out)
+        written.append(out)
+    return written

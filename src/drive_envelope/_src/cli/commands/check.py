@@ -1,0 +1,88 @@
+"""``drive-envelope check ENVELOPE_OR_DATASHEET LOG``: did logged operation stay inside the envelope?"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+ORDER = 70
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``check`` command."""
+    from drive_envelope._src.analysis.options import add_column_arguments
+
+    parser = subparsers.add_parser(
+        "check",
+        help="check a log of (velocity, effort) samples against an envelope",
+        description=(
+            "Report per joint the fraction of samples outside the envelope, by which curve, the worst "
+            "violation and where (time, row), the margin distribution to each limit and the time spent on "
+            "each limit. Exit status 1 when a joint's fraction outside exceeds --tolerance (for CI gates), "
+            "2 on bad input. Reads CSV (the CSV of `simulate` as-is) or Parquet in chunks."
+        ),
+    )
+    parser.add_argument(
+        "envelope",
+        metavar="ENVELOPE_OR_DATASHEET",
+        help="envelope file, datasheet file, catalog actuator name, or a joint mapping file ([joints] table)",
+    )
+    parser.add_argument("log", metavar="LOG", help="log file: .csv, .tsv, .txt (optionally .gz), .parquet")
+    add_column_arguments(parser)
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=0.0,
+        metavar="F",
+        help="largest fraction of samples allowed outside per joint (default 0)",
+    )
+    parser.add_argument(
+        "--slack",
+        type=float,
+        default=1e-6,
+        metavar="F",
+        help="a margin below -F times the curve's cap counts as outside (default 1e-6: rounding in logs)",
+    )
+    parser.add_argument(
+        "--limit-band",
+        type=float,
+        default=0.01,
+        metavar="F",
+        help="|margin| <= F times the cap counts as on the limit (default 0.01)",
+    )
+    parser.add_argument(
+        "--json", action="store_true", help="print one JSON object (SI) instead of the text report"
+    )
+    parser.add_argument(
+        "--plot",
+        metavar="FIG",
+        default=None,
+        help="also write the envelope plot with violations in red (.png/.svg/.pdf; one file per joint)",
+    )
+    parser.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    import json
+
+    from drive_envelope._src.analysis.api import check_log
+    from drive_envelope._src.analysis.check import CheckOptions
+    from drive_envelope._src.analysis.options import columns_from_args
+    from drive_envelope._src.analysis.text import format_check, plot_check
+
+    options = CheckOptions(
+        tolerance=args.tolerance,
+        slack=args.slack,
+        limit_band=args.limit_band,
+        keep_points=20000 if args.plot else 0,
+    )
+    report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
+    if args.plot:
+        written = plot_check(report, args.plot)
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        print(format_check(report))
+        if args.plot:
+            print("wrote " + ", ".join(str(path) for path in written))
+    return 0 if report.passed else 1

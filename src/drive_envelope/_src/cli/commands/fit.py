@@ -1,0 +1,124 @@
+"""``drive-envelope fit LOG``: estimate the four envelope parameters from measured saturated operation."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+ORDER = 75
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``fit`` command."""
+    from drive_envelope._src.analysis.options import add_column_arguments
+
+    parser = subparsers.add_parser(
+        "fit",
+        help="fit an envelope to measured (velocity, effort) samples or a digitized datasheet curve",
+        description=(
+            "Estimate max_effort, max_actuator_velocity, velocity_dependent_resistance and "
+            "speed_effort_gradient as the tightest envelope of the spec's form containing the samples (up "
+            "to --outlier-quantile), with bootstrap uncertainties and residuals. A limit the data never "
+            "reach is reported as unidentified (max_actuator_velocity = inf), not guessed."
+        ),
+    )
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("log", nargs="?", metavar="LOG", help="log of saturated operation (.csv or .parquet)")
+    source.add_argument(
+        "--from-curve",
+        metavar="POINTS",
+        default=None,
+        help="CSV of points digitized from a datasheet's torque-speed diagram ('speed [rpm],torque [mNm]')",
+    )
+    parser.add_argument(
+        "--joint", choices=("revolute", "prismatic"), default="revolute", help="joint type (units)"
+    )
+    parser.add_argument(
+        "--fix",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold a parameter: --fix max_effort=12, --fix 'max_actuator_velocity=3000 rpm' (repeatable)",
+    )
+    parser.add_argument(
+        "--outlier-quantile",
+        type=float,
+        default=0.0,
+        metavar="Q",
+        help="fraction of samples allowed outside (default 0: contain all; 0.5: central line through noise)",
+    )
+    parser.add_argument(
+        "--bootstrap", type=int, default=200, metavar="N", help="bootstrap resamples (default 200)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
+    parser.add_argument("--select", metavar="JOINT", default=None, help="joint to fit in a long-format log")
+    parser.add_argument("--name", default="", help="name written into the envelope file")
+    parser.add_argument(
+        "--output", "-o", metavar="FILE", default=None, help="write the envelope file (.toml or .json)"
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object (SI) instead of the table")
+    add_column_arguments(parser, time=False)
+    parser.set_defaults(func=_run)
+
+
+def _fixed(items: list[str], joint: str) -> dict[str, float]:
+    from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
+    from drive_envelope._src.envelope.parse import nearest_key, read_quantity
+    from drive_envelope._src.params.table import si_unit
+    from drive_envelope.errors import InputError
+
+    fixed = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not value.strip():
+            raise InputError(f"--fix {item!r}: expected NAME=VALUE, e.g. max_effort=12")
+        if name not in ENVELOPE_FIELDS:
+            raise InputError(
+                f"--fix {item!r}: unknown parameter {name!r}{nearest_key(name, ENVELOPE_FIELDS)}"
+            )
+        text = value.strip()
+        number: object = float(text) if _is_number(text) else text
+        fixed[name] = read_quantity(number, si_unit(name, joint), f"--fix {name}")
+    return fixed
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return text.lower() not in ("inf", "+inf", "infinity", "nan")
+
+
+def _run(args: argparse.Namespace) -> int:
+    import json
+
+    from drive_envelope._src.analysis.api import fit_curve, fit_log
+    from drive_envelope._src.analysis.fit import FitOptions
+    from drive_envelope._src.analysis.options import columns_from_args
+    from drive_envelope._src.analysis.text import format_fit
+    from drive_envelope._src.io.envelope_file import save_envelope
+
+    options = FitOptions(
+        joint=args.joint,
+        outlier_quantile=args.outlier_quantile,
+        fixed=_fixed(args.fix, args.joint),
+        bootstrap=args.bootstrap,
+        seed=args.seed,
+        name=args.name,
+    )
+    columns = columns_from_args(args)
+    if args.from_curve:
+        result = fit_curve(args.from_curve, columns=columns, options=options)
+    else:
+        result = fit_log(args.log, columns=columns, options=options, select=args.select)
+    if args.output:
+        save_envelope(result.envelope, args.output)
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=2))
+    else:
+        print(format_fit(result))
+        if args.output:
+            print(f"wrote {args.output}")
+    return 0

@@ -1,0 +1,193 @@
+"""Checking logs against envelopes: golden counts by hand, streaming invariance, mappings, test stand."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from drive_envelope import PerformanceEnvelope
+from drive_envelope.analysis import CheckOptions, check_log, check_samples, load_joint_mapping
+from drive_envelope.errors import InputError
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+# T = 10 N*m, R = 0.5 N*m*s/rad, V = 5 rad/s, G = 0.2 (rad/s)/(N*m)
+ENV = PerformanceEnvelope(
+    max_effort=10.0, max_actuator_velocity=5.0, velocity_dependent_resistance=0.5, speed_effort_gradient=0.2
+)
+#   row  t     v     tau    effort margin 10-0.5|v|-|tau|   velocity margin 5-0.2|tau|-|v|
+#   1    0.0   0     0      10                               5
+#   2    0.1   2     9      0      (on eq. 1)                1.2
+#   3    0.2   4    -5      3                                0      (on eq. 2)
+#   4    0.3  -3     9.5   -1      (outside eq. 1: 10 %)     0.1
+#   5    0.5   4.5   4      3.75                            -0.3    (outside eq. 2: 6 %)
+#   6    0.6   1     1      8.5                              3.8
+TIME = [0.0, 0.1, 0.2, 0.3, 0.5, 0.6]
+VELOCITY = [0.0, 2.0, 4.0, -3.0, 4.5, 1.0]
+EFFORT = [0.0, 9.0, -5.0, 9.5, 4.0, 1.0]
+
+
+def test_golden_counts_margins_and_worst_violation() -> None:
+    """Match the hand-computed table: outside counts per curve, worst sample, times on limits."""
+    check = check_samples(ENV, VELOCITY, EFFORT, time=TIME)
+    assert check.samples == 6 and check.samples_outside == 2
+    assert check.fraction_outside == pytest.approx(2 / 6)
+    assert (
+        check.effort.samples_outside == 1
+        and check.velocity is not None
+        and check.velocity.samples_outside == 1
+    )
+    assert check.effort.minimum == pytest.approx(-1.0) and check.velocity.minimum == pytest.approx(-0.3)
+    worst = check.worst
+    assert worst is not None and worst.curve == "effort"
+    assert (worst.row, worst.time, worst.velocity, worst.effort) == (4, 0.3, -3.0, 9.5)
+    assert worst.excess == pytest.approx(1.0) and worst.relative == pytest.approx(0.1)
+    speed = check.velocity.worst
+    assert speed is not None and (speed.row, speed.time) == (5, 0.5)
+    assert speed.relative == pytest.approx(0.06)
+    # time steps ending at each sample: 0, .1, .1, .1, .2, .1
+    assert check.duration == pytest.approx(0.6)
+    assert check.time_outside == pytest.approx(0.3)
+    assert check.effort.samples_on_limit == 1 and check.effort.time_on_limit == pytest.approx(0.1)
+    assert check.velocity.samples_on_limit == 1 and check.velocity.time_on_limit == pytest.approx(0.1)
+
+
+def test_tolerance_decides_the_verdict() -> None:
+    """Pass when the fraction outside is within the tolerance, fail above it."""
+    table = {"time": TIME, "velocity": VELOCITY, "effort": EFFORT}
+    assert not check_log(ENV, table).passed
+    assert check_log(ENV, table, options=CheckOptions(tolerance=0.34)).passed
+    assert not check_log(ENV, table, options=CheckOptions(tolerance=0.33)).passed
+
+
+def test_slack_absorbs_rounding_only() -> None:
+    """Count a sample 1e-9 of the cap outside as inside with the default slack, not with zero slack."""
+    effort = [10.0 * (1.0 + 1e-9)]
+    assert check_samples(ENV, [0.0], effort).samples_outside == 0
+    assert check_samples(ENV, [0.0], effort, options=CheckOptions(slack=0.0)).samples_outside == 1
+
+
+def test_infinite_speed_limit_skips_eq2() -> None:
+    """Report no eq. 2 margins when max_actuator_velocity is infinite."""
+    check = check_samples(PerformanceEnvelope(max_effort=1.0), [100.0], [0.5])
+    assert check.velocity is None and check.samples_outside == 0
+
+
+def test_margin_quantiles_match_numpy_within_the_bin_width() -> None:
+    """Agree with exact (inverted-CDF) quantiles of the margins to half a bin, 0.05 % of the cap."""
+    rng = np.random.default_rng(3)
+    velocity, effort = rng.uniform(-5.0, 5.0, 20000), rng.uniform(-10.0, 10.0, 20000)
+    check = check_samples(ENV, velocity, effort)
+    effort_margin, velocity_margin = ENV.margins(velocity, effort)
+    for summary, margins, cap in (
+        (check.effort, effort_margin, 10.0),
+        (check.velocity, velocity_margin, 5.0),
+    ):
+        assert summary is not None
+        for p, value in summary.quantiles:
+            exact = np.quantile(margins, p, method="inverted_cdf")
+            if exact > -cap:  # below -100 % of the cap only the minimum is kept
+                assert value == pytest.approx(exact, abs=0.5e-3 * cap + 1e-9)
+
+
+@settings(max_examples=25, deadline=None)
+@given(chunk_rows=st.integers(1, 40), seed=st.integers(0, 2**16))
+def test_results_do_not_depend_on_chunking(chunk_rows: int, seed: int) -> None:
+    """Give the same report whatever the chunk size (the streaming state carries across chunks)."""
+    rng = np.random.default_rng(seed)
+    n = 97
+    table = {
+        "time": np.cumsum(rng.uniform(0.0, 0.02, n)),
+        "velocity": rng.uniform(-6.0, 6.0, n),
+        "effort": rng.uniform(-11.0, 11.0, n),
+        "joint": rng.choice(["a", "b", "c"], n),
+    }
+    whole = check_log(ENV, table).to_dict()
+    parts = check_log(ENV, table, chunk_rows=chunk_rows).to_dict()
+    key = lambda joint: joint["joint"]  # noqa: E731
+    for one, other in zip(sorted(whole["joints"], key=key), sorted(parts["joints"], key=key), strict=True):
+        assert one["samples_outside"] == other["samples_outside"]
+        assert one["duration"] == pytest.approx(other["duration"])
+        for curve in ("effort", "velocity"):
+            assert one[curve]["quantiles"] == other[curve]["quantiles"]
+            assert one[curve]["worst"] == other[curve]["worst"]
+            assert one[curve]["time_on_limit"] == pytest.approx(other[curve]["time_on_limit"])
+
+
+def test_joint_mapping_with_exact_names_globs_and_inline_tables(tmp_path: Path) -> None:
+    """Give each joint the envelope its mapping names: exact key first, then globs in file order."""
+    (tmp_path / "env").mkdir()
+    (tmp_path / "env" / "big.toml").write_text("max_effort = 100.0\n", encoding="utf-8")
+    mapping = tmp_path / "joints.toml"
+    mapping.write_text(
+        '[joints]\n"arm_*" = "env/big.toml"\narm_2 = { max_effort = "5 N*m" }\n"*" = { max_effort = 1.0 }\n',
+        encoding="utf-8",
+    )
+    table = {"joint": ["arm_1", "arm_2", "wrist"], "velocity": [0.0, 0.0, 0.0], "effort": [50.0, 50.0, 0.5]}
+    report = check_log(mapping, table)
+    efforts = {j.joint: (j.envelope.max_effort, j.samples_outside) for j in report.joints}
+    assert efforts == {"arm_1": (100.0, 0), "arm_2": (5.0, 1), "wrist": (1.0, 0)}
+
+
+def test_mapping_errors_name_the_file_and_joint(tmp_path: Path) -> None:
+    """Refuse an unmatched joint, a log without joint column, and a bad mapping entry."""
+    mapping = tmp_path / "joints.toml"
+    mapping.write_text("[joints]\nknee = { max_effort = 1.0 }\n", encoding="utf-8")
+    with pytest.raises(InputError, match="no envelope for joint 'hip'"):
+        check_log(mapping, {"joint": ["hip"], "velocity": [0.0], "effort": [0.0]})
+    with pytest.raises(InputError, match="needs a joint column"):
+        check_log(mapping, {"velocity": [0.0], "effort": [0.0]})
+    mapping.write_text("[joints]\nknee = 3\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"joints\.knee"):
+        load_joint_mapping(mapping)
+
+
+def _stand(name: str) -> tuple[PerformanceEnvelope, object]:
+    teststand = pytest.importorskip("drive_envelope.teststand")
+    scenario = teststand.load_scenario(EXAMPLES / "scenarios" / f"{name}.toml")
+    envelope = scenario.effective_envelope()
+    assert envelope is not None
+    return envelope, teststand.simulate(scenario, engine="reference")
+
+
+@pytest.mark.parametrize(
+    "name", ["actuator_swing", "velocity_saturation_pgs", "velocity_saturation_tgs", "braking_pgs"]
+)
+def test_reference_test_stand_checks_clean_and_fails_a_tighter_envelope(name: str) -> None:
+    """Find no test-stand sample outside its own envelope, and some outside a 10 % tighter one."""
+    envelope, trajectory = _stand(name)
+    own = check_samples(envelope, trajectory.velocity, trajectory.effort, time=trajectory.time)  # type: ignore[attr-defined]
+    assert own.samples_outside == 0
+    assert own.effort.samples_on_limit + (own.velocity.samples_on_limit if own.velocity else 0) > 0
+    tighter = PerformanceEnvelope(
+        max_effort=0.9 * envelope.max_effort,
+        max_actuator_velocity=0.9 * envelope.max_actuator_velocity,
+        velocity_dependent_resistance=envelope.velocity_dependent_resistance,
+        speed_effort_gradient=envelope.speed_effort_gradient,
+    )
+    other = check_samples(tighter, trajectory.velocity, trajectory.effort, time=trajectory.time)  # type: ignore[attr-defined]
+    assert other.samples_outside > 0 and other.worst is not None
+
+
+def test_runaway_past_the_speed_limit_is_reported() -> None:
+    """Flag the overspeed scenario, where a load drives the joint past max_actuator_velocity."""
+    envelope, trajectory = _stand("overspeed_release_tgs")
+    check = check_samples(envelope, trajectory.velocity, trajectory.effort, time=trajectory.time)  # type: ignore[attr-defined]
+    assert check.velocity is not None and check.velocity.samples_outside > 0
+    assert check.worst is not None and check.worst.curve == "velocity"
+    assert check.time_outside is not None and check.time_outside > 0.0
+
+
+def test_kept_points_are_bounded_and_include_violations() -> None:
+    """Keep at most about twice keep_points samples per joint, violations flagged."""
+    rng = np.random.default_rng(0)
+    velocity, effort = rng.uniform(-6, 6, 50000), rng.uniform(-11, 11, 50000)
+    check = check_samples(ENV, velocity, effort, options=CheckOptions(keep_points=500))
+    points = check.points
+    assert points is not None and points.velocity.size <= 1000 and points.outside.sum() == 500
+    outside = ~ENV.contains(points.velocity[points.outside], points.effort[points.outside], atol=1e-9)
+    assert outside.all()

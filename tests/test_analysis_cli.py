@@ -1,0 +1,181 @@
+"""The `check` and `fit` commands: exit codes, JSON, envelope files, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope import PerformanceEnvelope, load_envelope, save_envelope
+from drive_envelope._src.cli.main import main
+
+ENV = PerformanceEnvelope(
+    max_effort=10.0,
+    max_actuator_velocity=5.0,
+    velocity_dependent_resistance=0.5,
+    speed_effort_gradient=0.2,
+    name="demo",
+)
+
+
+@pytest.fixture
+def envelope_file(tmp_path: Path) -> Path:
+    path = tmp_path / "env.toml"
+    save_envelope(ENV, path)
+    return path
+
+
+def write_log(path: Path, rows: list[tuple[float, float, float]]) -> Path:
+    lines = ["time,position,velocity,effort"] + [f"{t!r},0.0,{v!r},{e!r}" for t, v, e in rows]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_check_passes_inside_and_prints_the_report(
+    tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Exit 0 and print per-joint margins for a log inside the envelope."""
+    log = write_log(tmp_path / "log.csv", [(0.0, 0.0, 0.0), (0.1, 2.0, 9.0), (0.2, 4.0, 5.0)])
+    assert main(["check", str(envelope_file), str(log)]) == 0
+    out = capsys.readouterr().out
+    assert "joint 'demo': 3 samples over 0.2 s, 0 outside" in out and "PASSED" in out
+
+
+def test_check_fails_with_exit_1_and_json(
+    tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Exit 1 when violations exceed the tolerance; --json prints one object locating the worst."""
+    log = write_log(
+        tmp_path / "log.csv", [(0.0, 0.0, 0.0), (0.1, -3.0, 9.5), (0.2, 1.0, 1.0), (0.3, 1.0, 1.0)]
+    )
+    assert main(["check", str(envelope_file), str(log), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    joint = report["joints"][0]
+    assert report["passed"] is False and joint["samples_outside"] == 1
+    assert joint["effort"]["worst"]["time"] == 0.1 and joint["effort"]["worst"]["row"] == 2
+    assert main(["check", str(envelope_file), str(log), "--tolerance", "0.25"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("time,velocity\n0,1\n", "no column 'effort'"),
+        ("time,velocity,effort\n0,1,2\n1,x,3\n", "row 2, column 'velocity'"),
+        ("time,velocity,effort\n0,1,2\n1,nan,3\n", "row 2, column 'velocity'"),
+        ("", "empty file"),
+    ],
+)
+def test_check_malformed_log_exits_2_with_one_line(
+    tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str], text: str, message: str
+) -> None:
+    """Exit 2 with one 'drive-envelope: error:' line naming the row and column."""
+    log = tmp_path / "bad.csv"
+    log.write_text(text, encoding="utf-8")
+    assert main(["check", str(envelope_file), str(log)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("drive-envelope: error:") and message in err and err.count("\n") == 1
+
+
+def test_check_named_columns_and_joint_mapping(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Read renamed columns of a long-format log and apply a per-joint mapping file."""
+    mapping = tmp_path / "joints.toml"
+    mapping.write_text('[joints]\n"leg_*" = { max_effort = 2.0 }\n', encoding="utf-8")
+    log = tmp_path / "robot.csv"
+    log.write_text("stamp,name,qd,tau\n0,leg_l,0,1\n0,leg_r,0,3\n", encoding="utf-8")
+    args = [
+        "--time-column",
+        "stamp",
+        "--joint-column",
+        "name",
+        "--velocity-column",
+        "qd",
+        "--effort-column",
+        "tau",
+    ]
+    assert main(["check", str(mapping), str(log), *args, "--json"]) == 1
+    joints = {j["joint"]: j["samples_outside"] for j in json.loads(capsys.readouterr().out)["joints"]}
+    assert joints == {"leg_l": 0, "leg_r": 1}
+    assert main(["check", str(mapping), str(log), "--time-column", "time"]) == 2
+
+
+@pytest.mark.plot
+def test_check_writes_the_violation_plot(tmp_path: Path, envelope_file: Path) -> None:
+    """Write the envelope plot with the violations highlighted."""
+    log = write_log(tmp_path / "log.csv", [(0.0, 0.0, 0.0), (0.1, -3.0, 9.5), (0.2, 1.0, 1.0)])
+    figure = tmp_path / "check.png"
+    assert main(["check", str(envelope_file), str(log), "--plot", str(figure)]) == 1
+    assert figure.stat().st_size > 0
+
+
+def test_fit_json_and_output_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Print the four SI parameters with uncertainties and write an envelope file `envelope show` reads."""
+    effort = np.linspace(0.0, ENV.stall_effort(), 300)
+    velocity = ENV.velocity_limit(effort)
+    log = write_log(
+        tmp_path / "sweep.csv",
+        [(0.01 * i, v, e) for i, (v, e) in enumerate(zip(velocity.tolist(), effort.tolist(), strict=True))],
+    )
+    out = tmp_path / "fitted.toml"
+    assert (
+        main(["fit", str(log), "--json", "--bootstrap", "10", "--output", str(out), "--name", "bench"]) == 0
+    )
+    data = json.loads(capsys.readouterr().out)
+    for field in (
+        "max_effort",
+        "max_actuator_velocity",
+        "velocity_dependent_resistance",
+        "speed_effort_gradient",
+    ):
+        assert data[field] == pytest.approx(getattr(ENV, field), rel=1e-6)
+        assert field in data["uncertainty"]
+    assert load_envelope(out).name == "bench"
+    assert main(["envelope", "show", str(out)]) == 0
+
+
+def test_fit_from_curve_with_fixed_speed_limit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Fit a digitized curve given in rpm and mNm with --fix in vendor units."""
+    points = tmp_path / "curve.csv"
+    points.write_text(
+        "speed [rpm],torque [mNm]\n0,800\n1000,780\n2000,760\n2800,400\n3000,0\n", encoding="utf-8"
+    )
+    assert (
+        main(["fit", "--from-curve", str(points), "--fix", "max_actuator_velocity=3000 rpm", "--json"]) == 0
+    )
+    data = json.loads(capsys.readouterr().out)
+    assert data["max_actuator_velocity"] == pytest.approx(3000 * 2 * math.pi / 60)
+    assert data["status"]["max_actuator_velocity"] == "fixed"
+    assert data["max_effort"] == pytest.approx(0.8) and data[
+        "velocity_dependent_resistance"
+    ] == pytest.approx(0.02 / (1000 * 2 * math.pi / 60))
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--fix", "max_torque=3"], "unknown parameter 'max_torque'"),
+        (["--fix", "max_effort"], "expected NAME=VALUE"),
+        (["--fix", "max_effort=3 rpm"], "--fix max_effort"),
+        (["--outlier-quantile", "0.9"], "outlier-quantile"),
+    ],
+)
+def test_fit_bad_arguments_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
+    """Exit 2 with one line naming the bad argument."""
+    log = write_log(tmp_path / "sweep.csv", [(0.0, 1.0, 1.0), (0.1, 2.0, 1.0), (0.2, 3.0, 0.5)])
+    assert main(["fit", str(log), *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_check_reads_parquet(tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Check a Parquet log with the same columns as the simulate CSV."""
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    log = tmp_path / "log.parquet"
+    pq.write_table(pa.table({"time": [0.0, 0.1], "velocity": [0.0, 6.0], "effort": [0.0, 0.0]}), log)
+    assert main(["check", str(envelope_file), str(log), "--json"]) == 1
+    velocity = json.loads(capsys.readouterr().out)["joints"][0]["velocity"]
+    assert velocity["worst"]["excess"] == pytest.approx(1.0) and velocity["worst"]["row"] == 2

@@ -1,0 +1,167 @@
+"""Reading logs for the analysis: CSV (pyarrow and standard library), Parquet, tables, bad input."""
+
+from __future__ import annotations
+
+import gzip
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope.analysis import LogColumns, iter_log, read_log
+from drive_envelope.errors import InputError
+
+HAS_PYARROW = importlib.util.find_spec("pyarrow") is not None
+ENGINES = [
+    "python",
+    pytest.param("pyarrow", marks=pytest.mark.skipif(not HAS_PYARROW, reason="needs pyarrow")),
+]
+
+SIMULATE_CSV = "time,position,velocity,effort\n0.0,0.0,0.0,0.0\n0.01,0.001,0.5,2.0\n0.02,0.004,-1.5,-3.25\n"
+
+
+def write(tmp_path: Path, text: str, name: str = "log.csv") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_reads_the_simulate_csv_as_is(tmp_path: Path, engine: str) -> None:
+    """Read the CSV of `drive-envelope simulate` with the default columns."""
+    chunk = read_log(write(tmp_path, SIMULATE_CSV), engine=engine)  # type: ignore[arg-type]
+    np.testing.assert_array_equal(chunk.velocity, [0.0, 0.5, -1.5])
+    np.testing.assert_array_equal(chunk.effort, [0.0, 2.0, -3.25])
+    np.testing.assert_array_equal(chunk.time, [0.0, 0.01, 0.02])
+    assert chunk.joint is None
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_skips_comment_lines_and_blank_rows(tmp_path: Path, engine: str) -> None:
+    """Skip leading '#' comment lines and blank lines."""
+    text = "# engine: reference\n#\ntime,velocity,effort\n0,1,2\n\n1,3,4\n"
+    chunk = read_log(write(tmp_path, text), engine=engine)  # type: ignore[arg-type]
+    np.testing.assert_array_equal(chunk.velocity, [1.0, 3.0])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_chunks_keep_joint_codes_stable(tmp_path: Path, engine: str) -> None:
+    """Give a joint the same code in every chunk of a long-format log."""
+    rows = "".join(f"{i},{'ab'[i % 2] if i < 4 else 'c'},{i},{-i}\n" for i in range(7))
+    path = write(tmp_path, "time,joint,velocity,effort\n" + rows)
+    chunks = list(iter_log(path, chunk_rows=2, engine=engine))  # type: ignore[arg-type]
+    assert [c.first_row for c in chunks] == [1, 3, 5, 7]
+    codes = np.concatenate([c.joint for c in chunks if c.joint is not None])
+    names = chunks[-1].names
+    assert [names[k] for k in codes] == ["a", "b", "a", "b", "c", "c", "c"]
+
+
+def test_reads_gzip_and_tsv(tmp_path: Path) -> None:
+    """Read gzip-compressed and tab-separated logs."""
+    path = tmp_path / "log.tsv.gz"
+    with gzip.open(path, "wt", encoding="utf-8") as handle:
+        handle.write("velocity\teffort\n1\t2\n3\t4\n")
+    for engine in ("python", "auto"):
+        chunk = read_log(path, engine=engine)  # type: ignore[arg-type]
+        np.testing.assert_array_equal(chunk.effort, [2.0, 4.0])
+
+
+def test_reads_tables_of_arrays() -> None:
+    """Accept a mapping of NumPy arrays with a joint column of strings."""
+    table = {"velocity": np.array([1.0, 2.0]), "effort": [3, 4], "joint": np.array(["x", "y"])}
+    chunk = read_log(table)
+    assert chunk.names == ("x", "y")
+    np.testing.assert_array_equal(chunk.joint, [0, 1])
+
+
+def test_reads_parquet_with_custom_columns(tmp_path: Path) -> None:
+    """Read a Parquet log with renamed columns and a dictionary joint column."""
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    table = pa.table(
+        {
+            "t": [0.0, 0.1, 0.2],
+            "qd": [1.0, 2.0, 3.0],
+            "tau": [4, 5, 6],
+            "name": pa.array(["a", "b", "a"]).dictionary_encode(),
+        }
+    )
+    path = tmp_path / "log.parquet"
+    pq.write_table(table, path)
+    columns = LogColumns(velocity="qd", effort="tau", time="t", joint="name")
+    chunk = read_log(path, columns)
+    np.testing.assert_array_equal(chunk.effort, [4.0, 5.0, 6.0])
+    assert [chunk.names[k] for k in chunk.joint] == ["a", "b", "a"]  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("time,velocity\n0,1\n", "no column 'effort'"),
+        ("time,velocity,effort\n0,1,2\n1,abc,3\n", "row 2, column 'velocity': got 'abc'"),
+        ("time,velocity,effort\n0,1,2\n1,2,3\n2,3,\n", "row 3, column 'effort': got an empty cell"),
+        ("time,velocity,effort\n0,1,2\n1,nan,3\n", "row 2, column 'velocity': got an empty cell or NaN"),
+        ("time,velocity,effort\n0,1,2\n1,inf,3\n", "row 2, column 'velocity': got inf"),
+        ("", "empty file"),
+        ("# only a comment\n", "empty file"),
+        ("time,velocity,effort\n", "no data rows"),
+    ],
+)
+def test_malformed_logs_name_the_row_and_column(tmp_path: Path, engine: str, text: str, message: str) -> None:
+    """Raise one InputError naming the file, row and column of a malformed log."""
+    path = write(tmp_path, text)
+    with pytest.raises(InputError, match=message) as info:
+        read_log(path, engine=engine)  # type: ignore[arg-type]
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
+def test_reports_the_earliest_bad_row_across_columns(tmp_path: Path) -> None:
+    """Name the earliest bad row even when a later column is the one that fails."""
+    path = write(tmp_path, "velocity,effort\n1,2\n2,\n,3\n")
+    for engine in ("python", "auto"):
+        with pytest.raises(InputError, match="row 2, column 'effort'"):
+            read_log(path, engine=engine)  # type: ignore[arg-type]
+
+
+def test_ragged_row_is_named(tmp_path: Path) -> None:
+    """Report a row with too few fields by its number."""
+    path = write(tmp_path, "time,velocity,effort\n0,1,2\n1,2\n")
+    with pytest.raises(InputError, match="row 2"):
+        read_log(path, engine="python")
+    with pytest.raises(InputError, match=r"row 2|cannot read as CSV"):
+        read_log(path)
+
+
+def test_explicit_time_column_must_exist(tmp_path: Path) -> None:
+    """Require a time column the user named, but not the default one."""
+    path = write(tmp_path, "velocity,effort\n1,2\n")
+    assert read_log(path).time is None
+    with pytest.raises(InputError, match=r"no column 'stamp'.*--time-column"):
+        read_log(path, LogColumns(time="stamp", require_time=True))
+
+
+def test_missing_file_is_an_input_error(tmp_path: Path) -> None:
+    """Report a missing log file in one line."""
+    with pytest.raises(InputError, match="no such file"):
+        read_log(tmp_path / "absent.csv")
+
+
+def test_reads_a_pyarrow_table_and_names_a_null_row() -> None:
+    """Accept a pyarrow Table in memory and name the row of a null cell."""
+    pa = pytest.importorskip("pyarrow")
+    table = pa.table({"velocity": [1.0, 2.0, 3.0], "effort": [4.0, 5.0, 6.0]})
+    np.testing.assert_array_equal(read_log(table).velocity, [1.0, 2.0, 3.0])
+    with pytest.raises(InputError, match="row 2, column 'effort'"):
+        read_log(pa.table({"velocity": [1.0, 2.0], "effort": [4.0, None]}))
+
+
+def test_parquet_with_text_column_is_refused(tmp_path: Path) -> None:
+    """Refuse a Parquet column of strings where numbers are expected, naming it."""
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    path = tmp_path / "log.parquet"
+    pq.write_table(pa.table({"velocity": ["fast"], "effort": [1.0]}), path)
+    with pytest.raises(InputError, match="column 'velocity' has type string"):
+        read_log(path)
