@@ -45,11 +45,16 @@ pytest: setup
 
 test: lint typecheck pytest
 
+# opt-in: the default PyPI torch wheel pulls ~3 GB of CUDA libraries (5.5 GB venv), so torch gets
+# its own virtual environment and its own target instead of slowing every `make test`
+TORCH_VENV := .venv-torch
 test-torch:
-	$(MAKE) EXTRAS=test,all,torch pytest
+	test -x $(TORCH_VENV)/bin/python || $(PYTHON) -m venv $(TORCH_VENV)
+	$(TORCH_VENV)/bin/python -m pip install -q --disable-pip-version-check -e '.[test,torch]'
+	$(TORCH_VENV)/bin/python -m pytest -q -m torch
 
 bench: setup
-	$(BIN)/python benchmarks/run_all.py
+	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
+	rm -rf $(VENV) $(TORCH_VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build

@@ -67,7 +67,10 @@ def test_public_module_exports_what_it_defines(module_name: str) -> None:
     """Resolve every name in each public module's __all__."""
     module = importlib.import_module(module_name)
     for name in module.__all__:
-        assert hasattr(module, name), f"{module_name}.{name}"
+        try:
+            getattr(module, name)
+        except ImportError as exc:  # an engine adapter whose optional extra is not installed
+            pytest.skip(f"{module_name}.{name}: {exc}")
 
 
 def test_public_api_snapshot() -> None:

@@ -1,0 +1,41 @@
+"""The envelope on PyTorch tensors (extra ``torch``): batched ops and an Isaac Lab style actuator.
+
+Device-agnostic (CPU or CUDA tensors), no Python loops over DOFs; importing this module does not
+import torch (each function does). ``clamp_drive_impulse`` has the core's signature (PhysX argument
+order) and reproduces PhysX's float32 numbers on float32 tensors; NumPy arrays and scalars are
+accepted too, and ``.numpy()`` reads the result back on the CPU. Eager PyTorch runs that port as
+about a hundred elementwise operations; ``fused_clamp_drive_impulse`` (same signature, same numbers)
+fuses them with ``torch.compile`` for RL-scale loops (the first call compiles, about a minute).
+
+``EnvelopeActuator`` has the shape of Isaac Lab's explicit actuators: ``compute(targets, joint_pos,
+joint_vel) -> efforts``, a PD law clipped by the envelope. Example::
+
+    from drive_envelope.torch import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
+
+    cfg = EnvelopeActuatorCfg(stiffness=40.0, damping=2.0, max_effort=12.0,
+                              max_actuator_velocity="300 rpm", speed_effort_gradient=0.5)
+    actuator = EnvelopeActuator(cfg, num_envs=4096, num_joints=12, device="cuda:0")
+    efforts = actuator.compute(JointTargets(joint_positions=q_target), q, qd)
+"""
+
+from __future__ import annotations
+
+from drive_envelope._src.kernels.torch_actuator import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
+from drive_envelope._src.kernels.torch_ops import (
+    clamp_drive_impulse,
+    clamp_effort,
+    clamp_effort_implicit,
+    effort_limit,
+    fused_clamp_drive_impulse,
+)
+
+__all__ = [
+    "EnvelopeActuator",
+    "EnvelopeActuatorCfg",
+    "JointTargets",
+    "clamp_drive_impulse",
+    "clamp_effort",
+    "clamp_effort_implicit",
+    "effort_limit",
+    "fused_clamp_drive_impulse",
+]

@@ -1,0 +1,203 @@
+"""PyTorch backend (drive_envelope.torch) against the NumPy reference, on the CPU and CUDA.
+
+Tolerances: ``clamp_drive_impulse`` on float32 tensors is compared bit for bit with the reference in
+float32 (PhysX's arithmetic) and with PhysX's own results (tests/golden); on float64 tensors bit for
+bit with the float64 reference. The effort-level ops in float32 against the float64 reference:
+``rtol = 1e-5`` plus ``atol = 1e-5`` times the effort scale (implicit: ``1e-4``).
+
+torch is opt-in (see docs/kernels.md): these tests skip when it is not installed.
+"""
+
+from __future__ import annotations
+
+import inspect
+import subprocess
+import sys
+from typing import Any
+
+import numpy as np
+import pytest
+
+import drive_envelope as de
+from _kernel_vectors import IMPULSE_ARGS, edge_impulse_args, envelope_cases, physx_golden, random_impulse_args
+from drive_envelope.errors import InputError
+
+pytestmark = pytest.mark.torch
+
+DEVICES = ["cpu", pytest.param("cuda", marks=pytest.mark.gpu)]
+
+
+def _same(a: Any, b: Any) -> bool:
+    return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
+
+
+@pytest.fixture(params=DEVICES)
+def device(request: pytest.FixtureRequest) -> str:
+    return str(request.param)
+
+
+def _tensors(args: list[np.ndarray], device: str) -> list[Any]:
+    import torch
+
+    return [torch.from_numpy(a).to(device) for a in args]
+
+
+def test_signature_matches_core() -> None:
+    """Keep clamp_drive_impulse's parameters in the core's names and order."""
+    import drive_envelope.torch as dt
+
+    core = list(inspect.signature(de.clamp_drive_impulse).parameters)
+    assert list(inspect.signature(dt.clamp_drive_impulse).parameters) == core
+    assert core[:8] == list(IMPULSE_ARGS)
+
+
+@pytest.mark.parametrize("vectors", ["random", "edge"])
+def test_clamp_drive_impulse_matches_float32_reference(device: str, vectors: str) -> None:
+    """Reproduce the float32 reference bit for bit on random and edge-case vectors (NaN included)."""
+    import drive_envelope.torch as dt
+
+    args = random_impulse_args() if vectors == "random" else edge_impulse_args()
+    result = dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy()
+    assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32))
+
+
+def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
+    """Reproduce real PhysX's float32 results (tests/golden) bit for bit."""
+    import drive_envelope.torch as dt
+
+    golden = physx_golden()
+    if golden is None:
+        pytest.skip("tests/golden/physx_clamp_drive_impulse.npz not present")
+    args, expected = golden
+    assert _same(dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy(), expected)
+
+
+@pytest.mark.slow
+def test_fused_clamp_drive_impulse_matches_eager_port() -> None:
+    """Give the eager port's numbers from the torch.compile'd kernel (edge cases, PhysX golden, random)."""
+    import drive_envelope.torch as dt
+
+    golden = physx_golden()
+    parts = [edge_impulse_args(), random_impulse_args(2000), *([golden[0]] if golden else [])]
+    args = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+    try:
+        fused = dt.fused_clamp_drive_impulse(*_tensors(args, "cpu")).numpy()
+    except Exception as exc:  # torch.compile needs a working C++ toolchain; report, don't fail
+        pytest.skip(f"torch.compile unavailable here: {type(exc).__name__}: {exc}")
+    assert _same(fused, de.clamp_drive_impulse(*args, dtype=np.float32))
+
+
+def test_clamp_drive_impulse_float64_matches_reference() -> None:
+    """Match the float64 reference bit for bit when asked for float64 (NumPy inputs accepted)."""
+    import drive_envelope.torch as dt
+
+    args = [a.astype(np.float64) for a in random_impulse_args()]
+    assert _same(dt.clamp_drive_impulse(*args, dtype=np.float64).numpy(), de.clamp_drive_impulse(*args))
+
+
+@pytest.mark.parametrize("case", envelope_cases(), ids=lambda c: "-".join(sorted(c)))
+def test_effort_ops_match_reference(device: str, case: dict[str, float]) -> None:
+    """Match effort_limit, the explicit clamp and the implicit clamp of the float64 reference."""
+    import torch
+
+    import drive_envelope.torch as dt
+
+    env = de.PerformanceEnvelope(**case)
+    rng = np.random.default_rng(3)
+    n = 4000
+    velocity, effort, applied = (rng.normal(0.0, s, n).astype(np.float32) for s in (4.0, 6.0, 1.0))
+    response = rng.uniform(0.0, 80.0, n).astype(np.float32)
+    v, e, a, r = _tensors([velocity, effort, applied, response], device)
+    params = [
+        torch.full((n,), getattr(env, name), device=device) for name in de.PerformanceEnvelope.__slots__[:4]
+    ]
+    v64, e64, a64, r64 = (x.astype(np.float64) for x in (velocity, effort, applied, response))
+    atol = 1e-5 * max(env.max_effort, 1.0)
+
+    np.testing.assert_allclose(dt.effort_limit(v, *params).cpu(), env.effort_limit(v64), rtol=1e-5, atol=atol)
+    explicit = dt.clamp_effort(e, v, *params).cpu()
+    np.testing.assert_allclose(explicit, de.clamp_effort(env, e64, v64), rtol=1e-5, atol=atol)
+    implicit = dt.clamp_effort_implicit(e, v, r, 0.01, *params, applied_effort=a).cpu()
+    expected = de.clamp_effort_implicit(env, e64, v64, r64, 0.01, a64)
+    np.testing.assert_allclose(implicit, expected, rtol=1e-4, atol=10 * atol)
+
+
+def test_explicit_clamp_propagates_nan() -> None:
+    """Turn a NaN effort or velocity into NaN, as the reference does."""
+    import drive_envelope.torch as dt
+
+    env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
+    effort = np.array([np.nan, 1.0, 5.0, 1.0])
+    velocity = np.array([0.0, np.nan, 1.0, 3.0])
+    result = dt.clamp_effort(effort, velocity, 2.0, 3.0, 0.0, 0.5, dtype=np.float64)
+    assert _same(result, de.clamp_effort(env, effort, velocity))
+
+
+def test_explicit_ops_broadcast_scalars_and_arrays() -> None:
+    """Broadcast scalar and per-DOF arguments either way round, like the reference."""
+    import torch
+
+    import drive_envelope.torch as dt
+
+    caps = torch.tensor([1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(dt.effort_limit(0.5, caps, 4.0, 0.0, 1.0), [1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(dt.clamp_effort(5.0, torch.zeros(3), 2.0), [2.0, 2.0, 2.0])
+    np.testing.assert_array_equal(dt.clamp_effort(torch.tensor([5.0, -5.0]), 0.0, 2.0), [2.0, -2.0])
+    np.testing.assert_array_equal(dt.clamp_effort(-5.0, 1.0, caps), [-1.0, -2.0, -3.0])
+
+
+def test_actuator_applies_pd_law_and_envelope(device: str) -> None:
+    """Compute the PD effort per env and joint and clip it with the envelope at the current velocity."""
+    import torch
+
+    from drive_envelope.torch import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
+
+    cfg = EnvelopeActuatorCfg(
+        stiffness=[40.0, 10.0, 0.0],
+        damping=2.0,
+        max_effort=[12.0, 3.0, "500 N*cm"],
+        max_actuator_velocity="60 rpm",
+        speed_effort_gradient=0.5,
+    )
+    actuator = EnvelopeActuator(cfg, num_envs=64, num_joints=3, device=device)
+    gen = torch.Generator().manual_seed(0)
+    q, qd, q_des, tau_ff = (torch.randn(64, 3, generator=gen).to(device) for _ in range(4))
+    efforts = actuator.compute(JointTargets(joint_positions=q_des, joint_efforts=tau_ff), q, qd)
+
+    kp, kd = np.array([40.0, 10.0, 0.0]), 2.0
+    q_np, qd_np, q_des_np, ff_np = (t.cpu().numpy().astype(np.float64) for t in (q, qd, q_des, tau_ff))
+    law = kp * (q_des_np - q_np) - kd * qd_np + ff_np
+    np.testing.assert_allclose(actuator.computed_effort.cpu(), law, rtol=1e-5, atol=1e-5)
+    for j, max_effort in enumerate([12.0, 3.0, 5.0]):
+        env = de.PerformanceEnvelope(
+            max_effort=max_effort, max_actuator_velocity=2.0 * np.pi, speed_effort_gradient=0.5
+        )
+        expected = de.clamp_effort(env, law[:, j], qd_np[:, j])
+        np.testing.assert_allclose(efforts[:, j].cpu(), expected, rtol=1e-5, atol=1e-4)
+    assert efforts is actuator.applied_effort
+
+
+def test_bad_input_raises_input_error() -> None:
+    """Reject bad gains, envelope values, joint counts, dt and dtype with InputError."""
+    import drive_envelope.torch as dt
+
+    with pytest.raises(InputError, match="damping"):
+        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=-1.0, max_effort=1.0)
+    with pytest.raises(InputError, match="speed_effort_gradient"):
+        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=1.0, max_effort=1.0, speed_effort_gradient=float("nan"))
+    with pytest.raises(InputError, match="angle"):
+        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=1.0, max_effort=1.0, max_actuator_velocity="5 Hz")
+    cfg = dt.EnvelopeActuatorCfg(stiffness=[1.0, 2.0], damping=1.0, max_effort=1.0)
+    with pytest.raises(InputError, match="2 values for 3 joints"):
+        dt.EnvelopeActuator(cfg, num_envs=1, num_joints=3)
+    with pytest.raises(InputError, match="dt"):
+        dt.clamp_effort_implicit(1.0, 0.0, 1.0, -0.01, 1.0)
+    with pytest.raises(InputError, match="dtype"):
+        dt.clamp_drive_impulse(0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, dtype=np.int32)
+
+
+def test_import_is_light() -> None:
+    """Import drive_envelope.torch without importing torch."""
+    code = "import sys, drive_envelope.torch\nprint('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
