@@ -4,10 +4,11 @@ maxForce, the drive gains and the three envelope values are read from PhysX's jo
 (ovphysx 0.7's ``ARTICULATION_JOINT`` attributes ``jointMaxForce``, ``jointStiffness``,
 ``jointMaxActuatorVelocity``, ``jointVelocityDependentResistance``, ``jointSpeedEffortGradient``:
 live PhysX state, angular values folded back to degrees as USD stores them). The envelope is also
-read from PhysX's behaviour against closed forms (SEMANTICS.md): the velocity settles exactly on maxActuatorVelocity, the first step from rest
-exerts ``maxEffort / (1 + r*R*dt)``, and against a constant load ``L`` the speed settles on
-``maxActuatorVelocity - speedEffortGradient*L``. They run in a centimetre-gram stage, so the
-degree conversion and the stage-unit scaling are both exercised (the parity tests use SI stages).
+read from PhysX's behaviour against closed forms (SEMANTICS.md): the velocity settles exactly on
+maxActuatorVelocity, the first step from rest exerts ``maxEffort / (1 + r*R*dt)``, and against a
+constant load ``L`` the speed settles on ``maxActuatorVelocity - speedEffortGradient*L``. They run
+in a centimetre-gram stage, so the degree conversion and the stage-unit scaling are both exercised
+(the parity tests use SI stages).
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ PATHS = sorted(EXAMPLES.glob("*.toml"))
 
 @pytest.fixture(scope="module")
 def physx_runs() -> dict[str, Trajectory]:
-    """Every bundled scenario run once on PhysX, in one PhysX process."""
+    """Every bundled scenario run once on PhysX, on one PhysX instance."""
     module: Any = engine_module("physx")
     scenarios = [load_scenario(path) for path in PATHS]
     runs = (

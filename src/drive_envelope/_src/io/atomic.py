@@ -34,7 +34,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     if not directory.is_dir():
         raise InputError(f"{target}: cannot write: folder {str(directory)!r} does not exist")
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory)
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory
+        )
     except OSError as exc:
         raise InputError(f"{target}: cannot write: {exc.strerror}") from None
     os.close(fd)

@@ -2,27 +2,30 @@
 
 ovphysx 0.7 reads USD through ovstage, whose OpenUSD build is namespaced apart from usd-core's
 ``pxr``, so both live in one process (checked with usd-core 26.11 and ovstage 0.3: the stage is
-authored with ``pxr`` and handed over as USDA text). The first use sets ovphysx's process-wide
-state once: CPU-only mode (sticky for the process, as ovphysx defines it), the PhysX schemas
-from ``physx-usd-schemas`` registered with ovstage population, log level ERROR, and every cache
-(the Omniverse client cache, Warp's kernel cache, PhysX's cooked-collider cache) in
-``<tmp>/drive-envelope-ovphysx-<uid>``, never the repository or the user's home.
+authored with ``pxr`` and handed over as USDA text); ovphysx 0.3 needed a child process. The
+first use sets ovphysx's process-wide state once: CPU-only mode (sticky for the process, as
+ovphysx defines it), the PhysX schemas of ``physx-usd-schemas`` registered with ovstage
+population, log level ERROR, and the Omniverse client's and Warp's caches in
+``<tmp>/drive-envelope-ovphysx-<uid>`` (never the repository or the user's home; PhysX's cooked
+colliders go to a process-private temp folder by default).
 
 Per step the runner writes the applied joint effort (``jointActuationForce``) and the external
 load (a link wrench: a torque about the joint axis, or a force along it), steps, and reads
 ``jointPosition``, ``jointVelocity`` (degrees on revolute joints, converted to radians here) and
-``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF.
-That is the total actuator effort (drive + applied); under TGS it also contains the external
-load, which the runner subtracts.
+``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF,
+which is the total actuator effort (drive + applied) on PGS and TGS alike (ovphysx 0.3.7's TGS
+also counted the external load in it; 0.7 does not).
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import logging
 import math
 import os
 import tempfile
+import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +34,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.usd.teststand_scene import JOINT_PATH, LINK_PATH
+from drive_envelope._src.usd.teststand_scene import ARTICULATION_PATH, JOINT_PATH, LINK_PATH
 from drive_envelope.errors import DriveEnvelopeError, InputError
 
 __all__ = ["PhysxJob", "PhysxResult", "cache_folder", "inspect_drives", "run_jobs"]
@@ -110,27 +113,56 @@ def _environment(**values: str) -> Iterator[None]:
                 os.environ[key] = old
 
 
+def _import_ovphysx() -> Any:
+    """``import ovphysx``, checking it is >= 0.7 (older ones have another API; 0.3.7 another clamp).
+
+    Raises:
+        InputError: ovphysx is missing or older than 0.7 (naming the extra to install).
+    """
+    try:
+        import ovphysx
+    except ImportError:
+        raise _needs_ovphysx("none") from None
+    version = str(getattr(ovphysx, "__version__", "unknown"))
+    if _release(version) < (0, 7):
+        raise _needs_ovphysx(version)
+    return ovphysx
+
+
+def _needs_ovphysx(found: str) -> InputError:
+    return InputError(
+        f"--engine physx: needs ovphysx >= 0.7 (found {found}); "
+        "install the extra: pip install 'drive-envelope[physx]'"
+    )
+
+
+def _release(version: str) -> tuple[int, int]:
+    """(major, minor) of a version string; (0, 0) when it does not start with two numbers."""
+    try:
+        major, minor = (int(part) for part in version.split(".")[:2])
+    except ValueError:
+        return (0, 0)
+    return (major, minor)
+
+
 def _prepare() -> Any:
     """Import ovphysx and do its once-per-process set-up; returns the ``ovphysx`` module.
 
     Raises:
-        DriveEnvelopeError: ovphysx or physx-usd-schemas is missing.
+        InputError: ovphysx (>= 0.7) or physx-usd-schemas is missing.
     """
     global _ready
-    try:
-        import ovphysx
-        import ovstage
-        from ovphysx.samples.python_samples.schema_support import physx_schema_paths
-    except ImportError as exc:
-        raise DriveEnvelopeError(
-            f"the physx engine needs ovphysx 0.7 (pip install 'drive-envelope[physx]'): {exc}"
-        ) from None
+    ovphysx = _import_ovphysx()
     if _ready:
         return ovphysx
+    import ovstage
+    from ovphysx.samples.python_samples.schema_support import physx_schema_paths
+
     folder = cache_folder()
-    for name in ("cache", "warp", "cooked"):
+    for name in ("cache", "warp"):
         (folder / name).mkdir(parents=True, exist_ok=True)
-    # the Omniverse client fixes its cache folder on the first ovstage call, Warp on its init
+    # the Omniverse client fixes its cache folder on the first ovstage call, Warp on its init;
+    # PhysX's cooked colliders already go to a process-private temp folder by default
     with _environment(XDG_CACHE_HOME=str(folder / "cache"), WARP_CACHE_PATH=str(folder / "warp")):
         _init_warp()
         ovphysx.set_log_level(ovphysx.LogLevel.ERROR)
@@ -138,27 +170,20 @@ def _prepare() -> Any:
             # sticky per process; refused while another PhysX instance is alive, in which case
             # the stage's enableGPUDynamics = false still keeps the stand on CPU dynamics
             ovphysx.PhysX.set_cpu_mode(True)
-        with contextlib.suppress(RuntimeError):
-            ovphysx.set_global_config(ovphysx.GlobalConfigKey.NUM_THREADS, 0)  # one small scene
-            ovphysx.set_global_config(
-                ovphysx.GlobalConfigKey.COOKED_COLLIDER_CACHE_DIRECTORY, str(folder / "cooked")
-            )
         try:
             ovstage.population.register_usd_schemas([str(path) for path in physx_schema_paths()])
         except FileNotFoundError as exc:
-            raise DriveEnvelopeError(f"the physx engine needs physx-usd-schemas: {exc}") from None
+            raise InputError(f"--engine physx: needs physx-usd-schemas: {exc}") from None
     _ready = True
     return ovphysx
 
 
 def _init_warp() -> None:
-    """Initialise Warp quietly (ovphysx returns Warp arrays) unless the caller already did."""
+    """Initialise Warp (ovphysx returns Warp arrays) without its banner; a no-op if already done."""
     import warp as wp
 
-    if getattr(wp._src.context, "runtime", None) is not None:  # keep the caller's Warp set-up
-        return
     level = wp.config.log_level
-    wp.config.log_level = max(level, logging.WARNING)  # no "Warp initialized" banner on stdout
+    wp.config.log_level = max(level, logging.WARNING)
     try:
         wp.init()
     finally:
@@ -166,11 +191,29 @@ def _init_warp() -> None:
 
 
 @contextlib.contextmanager
-def _attached(ovphysx: Any, *, usda: str | None = None, path: str | None = None) -> Iterator[Any]:
-    """A PhysX instance with one stage (USDA text or a file) populated and attached."""
+def _physx() -> Iterator[Any]:
+    """One CPU PhysX instance (a DriveEnvelopeError for PhysX's own failures)."""
+    ovphysx = _prepare()
+    with warnings.catch_warnings():
+        # ovphysx warns once that a CUDA build of Warp may open the driver; the stand runs on CPU
+        warnings.filterwarnings("ignore", message="ovphysx is in CPU-only mode", category=RuntimeWarning)
+        physx = ovphysx.PhysX()
+        try:
+            yield physx
+        except (RuntimeError, ValueError) as exc:  # ovphysx's TaskError is a RuntimeError
+            message = " ".join(str(exc).split())[:400]
+            raise DriveEnvelopeError(f"PhysX (ovphysx) failed: {message}") from exc
+        finally:
+            gc.collect()  # ovphysx refuses to destroy while a Warp view of a read is alive
+            with contextlib.suppress(RuntimeError):  # then ovphysx destroys it at exit instead
+                physx.destroy()
+
+
+@contextlib.contextmanager
+def _attached(physx: Any, *, usda: str | None = None, path: str | None = None) -> Iterator[None]:
+    """Populate an ovstage stage from USDA text or a file and attach it to ``physx`` for the block."""
     import ovstage
 
-    physx = ovphysx.PhysX()
     stage = ovstage.Stage("drive-envelope")
     attached = False
     try:
@@ -182,62 +225,55 @@ def _attached(ovphysx: Any, *, usda: str | None = None, path: str | None = None)
         stage.advance_write_floor(ordinal=_ORDINAL).wait()
         physx.wait_task(physx.attach_ovstage(stage, read_ordinal=_ORDINAL))
         attached = True
-        yield physx
+        yield
     finally:
         try:
             if attached:
                 physx.wait_task(physx.detach_ovstage())
         finally:
-            physx.destroy()
             stage.destroy()
 
 
 def run_jobs(jobs: Sequence[PhysxJob]) -> list[PhysxResult]:
-    """Step every job on PhysX and return the samples, in order.
+    """Step every job on one PhysX instance and return the samples, in order.
 
     Raises:
-        DriveEnvelopeError: ovphysx is missing or PhysX failed.
+        InputError: ovphysx (>= 0.7) or physx-usd-schemas is missing.
+        DriveEnvelopeError: PhysX failed.
     """
-    ovphysx = _prepare()
     results = []
-    for job in jobs:
-        try:
-            with _attached(ovphysx, usda=job.usda) as physx:
+    with _physx() as physx:
+        for job in jobs:
+            with _attached(physx, usda=job.usda):
                 results.append(_step_job(physx, job))
-        except (RuntimeError, ValueError) as exc:  # TaskError is a RuntimeError
-            raise DriveEnvelopeError(f"PhysX (ovphysx) failed: {' '.join(str(exc).split())[:400]}") from exc
     return results
 
 
 def inspect_drives(usd_path: str | os.PathLike[str]) -> dict[str, dict[str, float]]:
-    """What PhysX loaded for every articulation DOF of a USD file, in PhysX's units.
+    """What PhysX loaded for every articulation DOF of a USD file, in ovphysx's units.
 
     Returns:
         ``{joint path: {max_force, stiffness, damping, max_actuator_velocity,
         velocity_dependent_resistance, speed_effort_gradient}}`` (a joint with several free axes
-        gets ``path[axis]`` keys). Values are PhysX's after its USD parsing, as ovphysx reports
-        them: angular DOFs per degree (deg/s, N*m*s/deg, (deg/s)/(N*m), stiffness per degree),
-        lengths and masses in stage units. Divide by the
+        gets ``path[axis]`` keys). Values are PhysX's after its USD parsing, folded back by ovphysx
+        to USD's units: angular DOFs per degree (deg/s, N*m*s/deg, (deg/s)/(N*m), stiffness per
+        degree), lengths and masses in stage units. Divide by the
         :class:`~drive_envelope._src.usd.scale.StageUnits` factors for SI.
 
     Raises:
-        InputError: the file does not exist.
-        DriveEnvelopeError: ovphysx is missing or PhysX failed.
+        InputError: the file does not exist, or ovphysx (>= 0.7) is missing.
+        DriveEnvelopeError: PhysX failed.
     """
     if not Path(usd_path).is_file():
         raise InputError(f"{os.fspath(usd_path)}: no such file")
-    ovphysx = _prepare()
     result: dict[str, dict[str, float]] = {}
-    try:
-        with _attached(ovphysx, path=os.fspath(usd_path)) as physx:
-            columns = _read_joints(physx, list(_INSPECTED.values()))
-            for column, attribute in _INSPECTED.items():
-                for joint, values in columns[attribute].items():
-                    for axis, value in enumerate(values):
-                        key = joint if len(values) == 1 else f"{joint}[{axis}]"
-                        result.setdefault(key, {})[column] = float(value)
-    except (RuntimeError, ValueError) as exc:
-        raise DriveEnvelopeError(f"PhysX (ovphysx) failed: {' '.join(str(exc).split())[:400]}") from exc
+    with _physx() as physx, _attached(physx, path=os.fspath(usd_path)):
+        columns = _read_joints(physx, list(_INSPECTED.values()))
+    for column, attribute in _INSPECTED.items():
+        for joint, values in columns[attribute].items():
+            for axis, value in enumerate(values):
+                key = joint if len(values) == 1 else f"{joint}[{axis}]"
+                result.setdefault(key, {})[column] = float(value)
     return result
 
 
@@ -287,10 +323,10 @@ def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
     physx.warmup()
     # revolute DOFs are read and written in degrees, prismatic ones in stage lengths
     coordinate = math.degrees(1.0) if revolute else job.length_scale
-    _write(physx, joint_type, "jointPosition", JOINT_PATH, np.float32([job.initial_position * coordinate]))
-    _write(physx, joint_type, "jointVelocity", JOINT_PATH, np.float32([job.initial_velocity * coordinate]))
-    physx.update_articulations_kinematic(pattern=JOINT_PATH.rsplit("/", 1)[0])
-    applied = np.float32([job.applied_effort * job.effort_scale])
+    _write(physx, joint_type, "jointPosition", JOINT_PATH, _row(job.initial_position * coordinate))
+    _write(physx, joint_type, "jointVelocity", JOINT_PATH, _row(job.initial_velocity * coordinate))
+    physx.update_articulations_kinematic(pattern=ARTICULATION_PATH)  # link poses follow the joint
+    applied = _row(job.applied_effort * job.effort_scale)
     load = job.external_effort * job.effort_scale
     # [force xyz, torque xyz, world point]: a torque about Z, or a force along X through the
     # origin, which lies on the prismatic axis, so the force adds no torque
@@ -305,13 +341,14 @@ def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
         physx.step_sync(job.dt)
         samples[:, i] = _sample(physx, _STATE)
     position, velocity, effort = samples / np.array([[coordinate], [coordinate], [job.effort_scale]])
-    if job.solver == "tgs":
-        # TGS (external forces every substep) reports the total generalized force on the DOF, the
-        # external load included; PGS reports the joint's own force (measured, ovphysx 0.3.7 and 0.7)
-        effort[1:] -= job.external_effort
     if revolute:
         position = _unwrap(position, velocity, job.dt)
     return PhysxResult(position=position, velocity=velocity, effort=effort)
+
+
+def _row(value: float) -> npt.NDArray[np.float32]:
+    """One single-axis joint row (float32, ovphysx's element type)."""
+    return np.array([value], dtype=np.float32)
 
 
 def _sample(physx: Any, attributes: Sequence[str]) -> list[float]:

@@ -116,8 +116,9 @@ def _define_scene(stage: Usd.Stage, scenario: Scenario) -> None:
     sim = scenario.simulation
     _set(prim, "physxScene:solverType", Sdf.ValueTypeNames.Token, sim.solver.upper())
     _set(prim, "physxScene:timeStepsPerSecond", Sdf.ValueTypeNames.UInt, max(1, round(1.0 / sim.dt)))
-    # explicit: the schema default flipped (ovphysx 0.3's bundled schema: false, physx-usd-schemas
-    # 25.11: true); the reference engine models true, TGS's per-substep forces and envelope clamp
+    # explicit, as the reference engine models it (TGS: forces and envelope clamp per substep).
+    # ovphysx 0.3's bundled schema defaulted it to false; ovphysx 0.7 reads physx-usd-schemas
+    # (25.11: true) and runs unauthored bit-identically to true. Deprecated: true is TGS's future
     _set(prim, "physxScene:enableExternalForcesEveryIteration", Sdf.ValueTypeNames.Bool, True)
     _set(prim, "physxScene:enableStabilization", Sdf.ValueTypeNames.Bool, False)
     _set(prim, "physxScene:enableGPUDynamics", Sdf.ValueTypeNames.Bool, False)

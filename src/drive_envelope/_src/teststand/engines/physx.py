@@ -1,14 +1,15 @@
-"""The ``physx`` engine: the test stand on real PhysX (the ``ovphysx`` wheel, CPU).
+"""The ``physx`` engine: the test stand on real PhysX (the ``ovphysx`` 0.7 wheel, CPU).
 
 The scenario is authored as a USD stage (a fixed-base articulation with one revolute or prismatic
 joint, drive + PhysxDrivePerformanceEnvelopeAPI written by :mod:`drive_envelope.usd`, the
 scenario's solver type and iteration counts, zero link damping, ``cfmScale`` 0, no gravity) and
-stepped by PhysX in a child process (see :mod:`drive_envelope._src.usd.physx_runner`). The CSV has the
-same columns as the reference engine's: row 0 the initial state, then per step the joint position
-and velocity and PhysX's projected joint force, the total actuator effort (drive + applied).
+stepped by PhysX in this process (see :mod:`drive_envelope._src.usd.physx_runner`). The CSV has
+the same columns as the reference engine's: row 0 the initial state, then per step the joint
+position and velocity and PhysX's projected joint force, the total actuator effort (drive +
+applied).
 
 PhysX computes in float32: expect agreement with ``reference`` to float32 precision. Needs the
-``physx`` extra (``ovphysx``, ``usd-core``, ``physx-usd-schemas``).
+``physx`` extra (``ovphysx`` >= 0.7, ``usd-core``, ``physx-usd-schemas``).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ def simulate(scenario: Scenario) -> Trajectory:
 
 
 def simulate_many(scenarios: Sequence[Scenario], *, units: StageUnits | None = None) -> list[Trajectory]:
-    """Run several scenarios in one PhysX process (PhysX starts once: about 2 s saved per scenario).
+    """Run several scenarios on one PhysX instance (ovphysx's set-up, about 1 s, is paid once).
 
     Args:
         scenarios: The scenarios (SI).
@@ -42,8 +43,8 @@ def simulate_many(scenarios: Sequence[Scenario], *, units: StageUnits | None = N
         One trajectory per scenario, in order, ``engine = "physx"``.
 
     Raises:
-        InputError: a scenario PhysX cannot represent (an acceleration drive on an envelope-free,
-            unlimited drive is fine; a step count of 0 is fine).
+        InputError: a scenario PhysX cannot represent (a time step below 2**-32 s, an envelope on
+            an unlimited drive), or ovphysx >= 0.7 / physx-usd-schemas missing.
         DriveEnvelopeError: PhysX itself failed.
     """
     from drive_envelope._src.usd.physx_runner import PhysxJob, run_jobs
