@@ -31,7 +31,7 @@ ENGINES: dict[str, str] = {
 ENGINE_EXTRAS: dict[str, tuple[str, tuple[str, ...]]] = {
     "reference": ("", ()),
     "mujoco": ("mujoco", ("mujoco",)),
-    "physx": ("physx", ("ovphysx", "pxr", "physx_usd_schemas")),
+    "physx": ("physx", ("ovphysx", "ovstage", "pxr", "physx_usd_schemas")),
 }
 """Engine name -> (pip extra, top-level packages it needs)."""
 
