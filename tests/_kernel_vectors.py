@@ -12,16 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-IMPULSE_ARGS = (
-    "joint_vel0",
-    "drive_impulse0",
-    "drive_impulse",
-    "response",
-    "max_joint_vel",
-    "max_impulse",
-    "speed_impulse_gradient",
-    "velocity_dependent_resistance",
-)
+from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS as IMPULSE_ARGS
+
 GOLDEN = Path(__file__).parent / "golden" / "physx_clamp_drive_impulse.npz"
 
 

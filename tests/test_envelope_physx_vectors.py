@@ -22,19 +22,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drive_envelope import clamp_drive_impulse
+from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS
 
 GOLDEN = Path(__file__).parent / "golden" / "physx_clamp_drive_impulse.npz"
 PHYSX_COMMIT = "a3d8a641de4c3014fd56704af0f50b8be7e9778b"
-COLUMNS = (
-    "joint_vel0",
-    "drive_impulse0",
-    "drive_impulse",
-    "response",
-    "max_joint_vel",
-    "max_impulse",
-    "speed_impulse_gradient",
-    "velocity_dependent_resistance",
-)
+COLUMNS = CLAMP_DRIVE_IMPULSE_ARGS
 # every edge category the issue asks for, with the fewest rows we accept
 MIN_ROWS = {
     "physical": 2000,

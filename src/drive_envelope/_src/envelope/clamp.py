@@ -27,12 +27,30 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.fast_clamp import clamp_drive_impulse_symmetric
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 
-__all__ = ["PX_EPS_F32", "PX_MAX_F32", "clamp_drive_impulse", "clamp_effort", "clamp_effort_implicit"]
+__all__ = [
+    "CLAMP_DRIVE_IMPULSE_ARGS",
+    "PX_EPS_F32",
+    "PX_MAX_F32",
+    "clamp_drive_impulse",
+    "clamp_effort",
+    "clamp_effort_implicit",
+]
 
 PX_EPS_F32 = float(np.finfo(np.float32).eps)
 """PhysX's absolute epsilon for near-zero denominators, ``FLT_EPSILON = 2^-23``."""
 PX_MAX_F32 = float(np.finfo(np.float32).max)
 """PhysX's sentinel for an absent bound, ``FLT_MAX``."""
+CLAMP_DRIVE_IMPULSE_ARGS = (
+    "joint_vel0",
+    "drive_impulse0",
+    "drive_impulse",
+    "response",
+    "max_joint_vel",
+    "max_impulse",
+    "speed_impulse_gradient",
+    "velocity_dependent_resistance",
+)
+"""Argument names of :func:`clamp_drive_impulse`, in PhysX's order (every backend uses them)."""
 
 Array = npt.NDArray[Any]
 

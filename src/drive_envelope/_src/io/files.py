@@ -15,7 +15,18 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["format_toml_value", "read_mapping"]
+__all__ = ["format_toml_value", "read_mapping", "read_text"]
+
+
+def read_text(path: str | os.PathLike[str]) -> str:
+    """Read a UTF-8 text file; a missing or unreadable file is a one-line :class:`InputError`."""
+    file = Path(path)
+    try:
+        return file.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{file}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{file}: cannot read: {exc}") from None
 
 
 def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -25,12 +36,7 @@ def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
         InputError: the file is missing, unreadable, malformed, or not a table at the top level.
     """
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{file}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{file}: cannot read: {exc}") from None
+    text = read_text(file)
     suffix = file.suffix.lower()
     try:
         if suffix == ".json":

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.kernels.warp_kernels import build, warp_module
 from drive_envelope.errors import InputError
@@ -280,18 +281,6 @@ def clamp_effort_implicit(
     return result
 
 
-_IMPULSE_ARGS = (
-    "joint_vel0",
-    "drive_impulse0",
-    "drive_impulse",
-    "response",
-    "max_joint_vel",
-    "max_impulse",
-    "speed_impulse_gradient",
-    "velocity_dependent_resistance",
-)
-
-
 def clamp_drive_impulse(
     joint_vel0: Any,
     drive_impulse0: Any,
@@ -346,10 +335,10 @@ def clamp_drive_impulse(
     try:
         shape = np.broadcast_shapes(*shapes)
     except ValueError:
-        listed = ", ".join(f"{n}={s}" for n, s in zip(_IMPULSE_ARGS, shapes, strict=True))
+        listed = ", ".join(f"{n}={s}" for n, s in zip(CLAMP_DRIVE_IMPULSE_ARGS, shapes, strict=True))
         raise InputError(f"clamp_drive_impulse: shapes do not broadcast ({listed})") from None
     n = int(np.prod(shape, dtype=np.int64))
-    inputs = [_as_array(v, n, device, name) for v, name in zip(values, _IMPULSE_ARGS, strict=True)]
+    inputs = [_as_array(v, n, device, name) for v, name in zip(values, CLAMP_DRIVE_IMPULSE_ARGS, strict=True)]
     result = wp.empty(n, dtype=wp.float32, device=device)
     if n:
         wp.launch(k.clamp_drive_impulse_kernel, dim=n, inputs=inputs, outputs=[result], device=device)

@@ -22,6 +22,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.io.atomic import atomic_write_text
+from drive_envelope._src.io.files import read_text
 from drive_envelope.errors import InputError
 
 __all__ = [
@@ -155,12 +156,7 @@ def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolut
         InputError: missing file, missing column, or a cell that is not a number.
     """
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{file}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{file}: cannot read: {exc}") from None
+    text = read_text(file)
     if file.suffix.lower() == ".json":
         return _from_json(text, file)
     return _from_csv(text, file, joint)
