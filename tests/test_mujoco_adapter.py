@@ -226,3 +226,23 @@ def test_quadruped_efforts_match_dense_numpy_computation(mujoco: Any) -> None:
         )  # fmt: skip
         expected = float(clamp_effort_implicit(limits[name], drive, v0, r, dt))
         assert data.actuator_force[index] == pytest.approx(expected, rel=1e-9, abs=1e-12), name
+
+
+def test_wheel_ships_every_plugin_source() -> None:
+    """List every C++ source of plugin/mujoco in the wheel's force-include and in PLUGIN_SOURCES."""
+    from pathlib import Path
+
+    from drive_envelope._src.adapters.mujoco.build import PLUGIN_SOURCES
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    on_disk = {p.name for p in (root / "plugin" / "mujoco").iterdir() if p.suffix in (".cc", ".h")}
+    on_disk.add("CMakeLists.txt")
+    config = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))
+    shipped = config["tool"]["hatch"]["build"]["targets"]["wheel"]["force-include"]
+    assert set(PLUGIN_SOURCES) == on_disk
+    assert shipped == {f"plugin/mujoco/{n}": f"drive_envelope/_plugin/mujoco/{n}" for n in PLUGIN_SOURCES}

@@ -3,7 +3,8 @@
 Run ``python -m drive_envelope._src.adapters.mujoco.build`` (part of ``make setup``). The wheel
 ships the headers (``mujoco/include``) and the library (``mujoco/libmujoco.so.X.Y.Z``); CMake
 compiles ``plugin/mujoco`` against exactly those and writes the library plus ``build-info.json``
-(the MuJoCo version it was built for) to ``plugin/mujoco/build`` (git-ignored).
+(the MuJoCo version it was built for) to ``plugin/mujoco/build`` (git-ignored) in a source
+checkout, or to a cache folder for an installed wheel, which ships the sources too.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from drive_envelope.errors import DriveEnvelopeError
 
 __all__ = [
     "BUILD_COMMAND",
+    "PLUGIN_SOURCES",
     "BUILD_INFO",
     "PluginError",
     "build_plugin",
@@ -42,14 +44,34 @@ class PluginError(DriveEnvelopeError, RuntimeError):
     """The MuJoCo plugin is missing, stale (another MuJoCo version) or cannot be built or loaded."""
 
 
-def plugin_source_dir() -> Path:
-    """``plugin/mujoco`` of the source tree this package was installed from (editable install)."""
+PLUGIN_SOURCES = ("CMakeLists.txt", "drive_math.h", "envelope.cc", "envelope.h", "exports.cc", "register.cc")
+"""The plugin's source files; a wheel ships them as ``drive_envelope/_plugin/mujoco`` (pyproject.toml)."""
+
+
+def _checkout_source_dir() -> Path:
     return Path(__file__).resolve().parents[5] / "plugin" / "mujoco"
 
 
+def _packaged_source_dir() -> Path:
+    return Path(__file__).resolve().parents[3] / "_plugin" / "mujoco"
+
+
+def plugin_source_dir() -> Path:
+    """The plugin sources: ``plugin/mujoco`` of a source checkout, else the copy inside the wheel."""
+    checkout = _checkout_source_dir()
+    return checkout if (checkout / "CMakeLists.txt").is_file() else _packaged_source_dir()
+
+
 def default_build_dir() -> Path:
-    """Where the build goes and where :func:`load_plugin` looks: ``plugin/mujoco/build``."""
-    return plugin_source_dir() / "build"
+    """Where the build goes and where :func:`load_plugin` looks.
+
+    ``plugin/mujoco/build`` in a source checkout; for an installed wheel (whose site-packages may be
+    read-only) ``$XDG_CACHE_HOME/drive-envelope/mujoco-plugin`` (default ``~/.cache/...``).
+    """
+    if (_checkout_source_dir() / "CMakeLists.txt").is_file():
+        return _checkout_source_dir() / "build"
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return cache / "drive-envelope" / "mujoco-plugin"
 
 
 def library_name() -> str:
@@ -107,7 +129,7 @@ def build_plugin(*, build_dir: str | os.PathLike[str] | None = None, quiet: bool
     source = plugin_source_dir()
     if not (source / "CMakeLists.txt").is_file():
         raise PluginError(
-            f"{source}: plugin sources not found (build from a source checkout of drive-envelope)"
+            f"{source}: plugin sources not found (reinstall drive-envelope, or build from a source checkout)"
         )
     cmake = shutil.which("cmake")
     if cmake is None:
