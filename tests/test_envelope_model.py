@@ -230,3 +230,19 @@ def test_from_dict_errors(data: dict[str, object], message: str) -> None:
     assert text.startswith("robot.toml: ")
     assert message in text
     assert "\n" not in text
+
+
+def test_subnormal_slopes_give_no_nan_and_no_warning() -> None:
+    """Treat a subnormal slope as no limit from its line: no NaN on the line's own end point."""
+    import warnings
+
+    env = PerformanceEnvelope(
+        max_effort=2.0,
+        max_actuator_velocity=3.0,
+        velocity_dependent_resistance=5e-324,
+        speed_effort_gradient=5e-324,
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert env.effort_limit([0.0, 3.0, 4.0]).tolist() == [2.0, 0.0, 0.0]
+        assert env.velocity_limit([0.0, 1.0, 3.0]).tolist() == [3.0, 3.0, 0.0]

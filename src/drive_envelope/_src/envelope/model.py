@@ -123,7 +123,8 @@ class PerformanceEnvelope:
         limit += self.max_effort
         if self.speed_effort_gradient > 0.0:
             eq2 = np.subtract(self.max_actuator_velocity, speed, out=speed)
-            eq2 *= 1.0 / self.speed_effort_gradient
+            with np.errstate(over="ignore"):  # a subnormal gradient: no effort limit from eq. 2 (inf)
+                eq2 /= self.speed_effort_gradient  # not *= 1/G: 0 * inf would be NaN at |v| = v_max
             np.minimum(limit, eq2, out=limit)
         elif math.isfinite(self.max_actuator_velocity):
             limit[speed > self.max_actuator_velocity] = 0.0
@@ -143,7 +144,9 @@ class PerformanceEnvelope:
         magnitude = np.abs(np.asarray(effort, dtype=np.float64))
         limit = self.max_actuator_velocity - self.speed_effort_gradient * magnitude
         if self.velocity_dependent_resistance > 0.0:
-            limit = np.minimum(limit, (self.max_effort - magnitude) / self.velocity_dependent_resistance)
+            with np.errstate(over="ignore"):  # a subnormal resistance: no speed limit from eq. 1 (inf)
+                eq1 = (self.max_effort - magnitude) / self.velocity_dependent_resistance
+            limit = np.minimum(limit, eq1)
         else:
             limit = np.where(magnitude > self.max_effort, 0.0, limit)
         return np.maximum(limit, 0.0)
