@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from drive_envelope import PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import (
+from drive_envelope._src.scenario.spec import (
     DriveSpec,
     JointSpec,
     LoadSpec,

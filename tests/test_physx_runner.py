@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drive_envelope._src.usd import physx_runner
+from drive_envelope._src.adapters.physx import runner as physx_runner
 from drive_envelope.errors import InputError
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"

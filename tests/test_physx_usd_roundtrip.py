@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from drive_envelope import PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import DriveSpec, JointSpec, LoadSpec, Scenario, SimulationSpec
+from drive_envelope._src.scenario.spec import DriveSpec, JointSpec, LoadSpec, Scenario, SimulationSpec
 
 pytestmark = [pytest.mark.physx, pytest.mark.usd]
 
@@ -87,8 +87,8 @@ def test_loaded_speed_reads_speed_effort_gradient(runs: list[object]) -> None:
 @pytest.fixture(scope="module")
 def robot_dofs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, float]]:
     """What PhysX loaded for the example robot after ``drive-envelope usd apply --map``."""
+    from drive_envelope._src.adapters.physx.runner import inspect_drives
     from drive_envelope._src.cli.main import main
-    from drive_envelope._src.usd.physx_runner import inspect_drives
 
     folder = tmp_path_factory.mktemp("robot")
     (folder / "usd").mkdir()

@@ -11,8 +11,8 @@ import pytest
 
 from drive_envelope import InputError, PerformanceEnvelope
 from drive_envelope._src.cli.main import main
+from drive_envelope._src.scenario.spec import load_scenario
 from drive_envelope._src.teststand.engines.reference import simulate
-from drive_envelope._src.teststand.scenario import load_scenario
 
 pytestmark = pytest.mark.plot
 

@@ -10,8 +10,8 @@ import pytest
 
 from drive_envelope import InputError
 from drive_envelope._src.cli.main import main
+from drive_envelope._src.scenario.spec import load_scenario
 from drive_envelope._src.teststand import engines
-from drive_envelope._src.teststand.scenario import load_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 SATURATION = EXAMPLES / "velocity_saturation_tgs.toml"

@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from drive_envelope._src.scenario.spec import load_scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
 from drive_envelope._src.teststand.engines import engine_module
 from drive_envelope._src.teststand.engines.reference import simulate
-from drive_envelope._src.teststand.scenario import load_scenario
-from drive_envelope._src.teststand.trajectory import Trajectory
 
 pytestmark = [pytest.mark.physx, pytest.mark.usd, pytest.mark.slow]
 

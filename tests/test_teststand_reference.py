@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drive_envelope import PerformanceEnvelope, implicit_drive_effort
+from drive_envelope._src.scenario.spec import Scenario, scenario_from_mapping
 from drive_envelope._src.teststand.engines.reference import simulate, step
-from drive_envelope._src.teststand.scenario import Scenario, scenario_from_mapping
 
 DT = 0.01
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from drive_envelope import InputError, PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import (
+from drive_envelope._src.scenario.spec import (
     DriveSpec,
     JointSpec,
     Scenario,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drive_envelope import InputError
-from drive_envelope._src.teststand.trajectory import (
+from drive_envelope._src.scenario.trajectory import (
     Trajectory,
     read_trajectory,
     save_trajectory,
@@ -92,7 +92,7 @@ def test_unequal_columns_are_refused() -> None:
 
 def test_failed_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A writer that fails midway leaves neither the target nor a temporary file."""
-    import drive_envelope._src.teststand.trajectory as module
+    import drive_envelope._src.scenario.trajectory as module
 
     def boom(_: Trajectory) -> str:
         raise RuntimeError("disk full")

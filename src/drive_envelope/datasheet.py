@@ -20,10 +20,11 @@ from drive_envelope._src.datasheet.catalog import (
     catalog_text,
     load_catalog_datasheet,
 )
-from drive_envelope._src.datasheet.derive import Candidate, Derivation, Duty, LineFit, derive
+from drive_envelope._src.datasheet.derive import derive
 from drive_envelope._src.datasheet.load import datasheet_from_mapping, load_datasheet
 from drive_envelope._src.datasheet.report import derivation_report, usd_snippet
 from drive_envelope._src.datasheet.resolve import resolve_envelope
+from drive_envelope._src.datasheet.result import Candidate, Derivation, Duty, LineFit
 from drive_envelope._src.datasheet.spec import (
     ControllerSpec,
     Datasheet,

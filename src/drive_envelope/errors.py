@@ -7,16 +7,6 @@ CLI prints that line and exits with status 2; it never shows a traceback for an 
 
 from __future__ import annotations
 
+from drive_envelope._src.errors import DriveEnvelopeError, InputError, UnitsError
+
 __all__ = ["DriveEnvelopeError", "InputError", "UnitsError"]
-
-
-class DriveEnvelopeError(Exception):
-    """Base class of every error drive_envelope raises on purpose."""
-
-
-class InputError(DriveEnvelopeError, ValueError):
-    """Bad user input: a file, key, value, unit or argument that cannot be used as given."""
-
-
-class UnitsError(InputError):
-    """A quantity with an unknown unit or a unit of the wrong dimension."""

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from drive_envelope._src.kernels.newton_clamp import resolve_envelope_arguments
+from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
 
 __all__ = ["ClampingPerformanceEnvelope", "resolve_envelope_arguments"]
 
@@ -32,7 +32,7 @@ ClampingPerformanceEnvelope: Any
 def __getattr__(name: str) -> Any:
     """Define ``ClampingPerformanceEnvelope`` on first access (this imports Newton and Warp)."""
     if name == "ClampingPerformanceEnvelope":
-        from drive_envelope._src.kernels.newton_clamp import build
+        from drive_envelope._src.adapters.newton.clamp import build
 
         try:
             return build()

@@ -9,8 +9,7 @@ as CSV or JSON. The ``reference`` engine is a float64 NumPy model of the PhysX a
 
 from __future__ import annotations
 
-from drive_envelope._src.teststand.engines import ENGINES, engine_names, simulate
-from drive_envelope._src.teststand.scenario import (
+from drive_envelope._src.scenario.spec import (
     DriveSpec,
     JointSpec,
     LoadSpec,
@@ -19,13 +18,14 @@ from drive_envelope._src.teststand.scenario import (
     load_scenario,
     scenario_from_mapping,
 )
-from drive_envelope._src.teststand.trajectory import (
+from drive_envelope._src.scenario.trajectory import (
     Trajectory,
     read_trajectory,
     save_trajectory,
     trajectory_to_csv,
     trajectory_to_json,
 )
+from drive_envelope._src.teststand.engines import ENGINES, engine_names, simulate
 
 __all__ = [
     "ENGINES",

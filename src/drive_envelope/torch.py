@@ -20,7 +20,7 @@ joint_vel) -> efforts``, a PD law clipped by the envelope. Example::
 
 from __future__ import annotations
 
-from drive_envelope._src.kernels.torch_actuator import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
+from drive_envelope._src.adapters.isaaclab.actuator import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
 from drive_envelope._src.kernels.torch_ops import (
     clamp_drive_impulse,
     clamp_effort,

@@ -18,16 +18,16 @@ Example::
 
 from __future__ import annotations
 
-from drive_envelope._src.usd.apply import open_stage, read_map, register_schemas, save_stage
-from drive_envelope._src.usd.authoring import (
+from drive_envelope._src.adapters.usd.apply import read_map
+from drive_envelope._src.adapters.usd.authoring import (
     DriveRecord,
     EnvelopeAuthoringWarning,
     list_drives,
     read_envelope,
-    stage_units,
     write_envelope,
 )
-from drive_envelope._src.usd.scale import StageUnits
+from drive_envelope._src.adapters.usd.scale import StageUnits
+from drive_envelope._src.adapters.usd.stage import open_stage, register_schemas, save_stage, stage_units
 
 __all__ = [
     "DriveRecord",

@@ -67,7 +67,7 @@ _FUNCS = ("clamp_drive_impulse_func", "clamp_effort_func", "clamp_effort_implici
 def __getattr__(name: str) -> Any:
     """Create the ``@wp.func`` building blocks on first access (this imports Warp)."""
     if name in _FUNCS:
-        from drive_envelope._src.kernels.warp_kernels import build
+        from drive_envelope._src.kernels.warp_funcs import build
 
         try:
             return getattr(build(), name)

@@ -23,7 +23,7 @@ import math
 import re
 from typing import TYPE_CHECKING, Any
 
-from drive_envelope.errors import UnitsError
+from drive_envelope._src.errors import UnitsError
 
 if TYPE_CHECKING:
     import pint

@@ -30,7 +30,7 @@ from drive_envelope._src.analysis.mapping import (
     resolve_spec,
 )
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 __all__ = ["EnvelopeSource", "check_log", "check_samples", "fit_curve", "fit_log", "resolve_envelopes"]
 

@@ -26,8 +26,8 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.logs import LogChunk
 from drive_envelope._src.analysis.mapping import JointMapping
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope.errors import InputError
 
 __all__ = [
     "MARGIN_QUANTILES",

@@ -23,9 +23,9 @@ import numpy.typing as npt
 
 from drive_envelope._src.analysis.logs import LogColumns
 from drive_envelope._src.envelope.model import JointType
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
 from drive_envelope._src.units import to_si
-from drive_envelope.errors import InputError
 
 __all__ = ["EFFORT_ALIASES", "VELOCITY_ALIASES", "read_curve"]
 

@@ -34,8 +34,8 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope.errors import InputError
 
 __all__ = ["FitOptions", "FitResult", "ParameterEstimate", "ParameterStatus", "fit_samples"]
 

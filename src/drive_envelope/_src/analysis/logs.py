@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",

@@ -22,10 +22,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope._src.envelope.parse import envelope_from_mapping
+from drive_envelope._src.envelope.model import PerformanceEnvelope, envelope_from_mapping
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
-from drive_envelope.errors import InputError
 
 __all__ = ["JointMapping", "is_mapping_file", "load_joint_mapping", "resolve_spec"]
 

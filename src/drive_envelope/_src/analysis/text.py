@@ -8,9 +8,9 @@ from pathlib import Path
 
 from drive_envelope._src.analysis.check import CheckReport, JointCheck, MarginSummary
 from drive_envelope._src.analysis.fit import FitResult
-from drive_envelope._src.cli.common import format_table, format_value
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.params.table import si_unit
-from drive_envelope.errors import InputError
 
 __all__ = ["format_check", "format_fit", "plot_check"]
 
@@ -134,7 +134,7 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
         raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
 
     from drive_envelope._src.plots.figure import plot_envelope, save_figure
-    from drive_envelope._src.teststand.trajectory import Trajectory
+    from drive_envelope._src.scenario.trajectory import Trajectory
 
     target = Path(path)
     written = []

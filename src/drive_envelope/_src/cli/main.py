@@ -11,7 +11,7 @@ import pkgutil
 import sys
 from collections.abc import Sequence
 
-from drive_envelope.errors import DriveEnvelopeError
+from drive_envelope._src.errors import DriveEnvelopeError
 
 __all__ = ["build_parser", "main"]
 
@@ -20,8 +20,8 @@ PROG = "drive-envelope"
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser, with every subcommand module registered."""
-    from drive_envelope import __version__
     from drive_envelope._src.cli import commands
+    from drive_envelope._src.version import VERSION as __version__
 
     parser = argparse.ArgumentParser(
         prog=PROG,

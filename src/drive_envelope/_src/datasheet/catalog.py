@@ -14,8 +14,8 @@ from importlib.resources.abc import Traversable
 
 from drive_envelope._src.datasheet.load import datasheet_from_mapping
 from drive_envelope._src.datasheet.spec import Datasheet
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
-from drive_envelope.errors import InputError
 
 __all__ = ["CatalogEntry", "catalog_entries", "catalog_entry", "catalog_text", "load_catalog_datasheet"]
 

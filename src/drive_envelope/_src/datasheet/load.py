@@ -22,10 +22,10 @@ from drive_envelope._src.datasheet.spec import (
     ParamSource,
     ScrewSpec,
 )
-from drive_envelope._src.envelope.parse import nearest_key
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.units import to_si
-from drive_envelope.errors import InputError
+from drive_envelope._src.values import nearest_key
 
 __all__ = [
     "DATASHEET_SECTIONS",

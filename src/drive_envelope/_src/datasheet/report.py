@@ -6,9 +6,9 @@ import json
 import math
 from collections.abc import Sequence
 
-from drive_envelope._src.cli.common import format_table, format_value
-from drive_envelope._src.datasheet.derive import Candidate, Derivation
+from drive_envelope._src.datasheet.result import Candidate, Derivation
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.io.envelope_file import envelope_to_json, envelope_to_toml
 from drive_envelope._src.params.table import si_unit
 

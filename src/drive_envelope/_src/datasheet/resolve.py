@@ -25,9 +25,9 @@ def resolve_envelope(spec: str, *, duty: str = "peak") -> PerformanceEnvelope:
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import datasheet_from_mapping, is_datasheet_mapping
-    from drive_envelope._src.envelope.parse import envelope_from_mapping
+    from drive_envelope._src.envelope.model import envelope_from_mapping
+    from drive_envelope._src.errors import InputError
     from drive_envelope._src.io.files import read_mapping
-    from drive_envelope.errors import InputError
 
     if duty != "peak" and duty != "continuous":
         raise InputError(f"duty: expected 'peak' or 'continuous', got {duty!r}")

@@ -31,9 +31,11 @@ from typing import Literal, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.params.table import si_unit
+from drive_envelope._src.values import nearest_key, read_quantity
 
-__all__ = ["ENVELOPE_FIELDS", "JointType", "PerformanceEnvelope", "QuadrantCorners"]
+__all__ = ["ENVELOPE_FIELDS", "JointType", "PerformanceEnvelope", "QuadrantCorners", "envelope_from_mapping"]
 
 JointType = Literal["revolute", "prismatic"]
 ENVELOPE_FIELDS = (
@@ -264,9 +266,41 @@ class PerformanceEnvelope:
             InputError: unknown key (with the nearest valid one), missing ``max_effort``, a value of
                 the wrong unit, negative, NaN or infinite where not allowed.
         """
-        from drive_envelope._src.envelope.parse import envelope_from_mapping
-
         return envelope_from_mapping(data, source=source)
+
+
+_KEYS = ("name", "joint", *ENVELOPE_FIELDS)
+
+
+def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> PerformanceEnvelope:
+    """Build a :class:`PerformanceEnvelope` from a mapping; every error names ``source`` and the key."""
+    if not isinstance(data, Mapping):
+        raise InputError(f"{source}: expected a table of envelope keys, got {type(data).__name__}")
+    for key in data:
+        if key not in _KEYS:
+            raise InputError(
+                f"{source}: unknown key {key!r}{nearest_key(str(key), _KEYS)}; valid keys: {', '.join(_KEYS)}"
+            )
+    joint = data.get("joint", "revolute")
+    if joint not in _JOINT_TYPES:
+        raise InputError(f"{source}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
+    name = data.get("name", "")
+    if not isinstance(name, str):
+        raise InputError(f"{source}: key 'name': expected a string, got {name!r}")
+    if "max_effort" not in data:
+        raise InputError(
+            f"{source}: missing required key 'max_effort' "
+            f"(the drive's effort cap, {si_unit('max_effort', joint)})"
+        )
+    values = {
+        field: read_quantity(data[field], si_unit(field, joint), f"{source}: key {field!r}")
+        for field in ENVELOPE_FIELDS
+        if field in data
+    }
+    try:
+        return PerformanceEnvelope(joint=joint, name=name, **values)  # type: ignore[arg-type]
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
 
 
 def _clip_quadrant(env: PerformanceEnvelope, v0: float, tau0: float) -> FloatArray:

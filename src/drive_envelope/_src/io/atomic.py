@@ -12,7 +12,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
 

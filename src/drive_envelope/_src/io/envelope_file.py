@@ -9,11 +9,12 @@ from pathlib import Path
 from typing import Literal
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.io.atomic import atomic_write_text
 from drive_envelope._src.io.files import format_toml_value, read_mapping
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["envelope_to_json", "envelope_to_toml", "load_envelope", "save_envelope"]
+__all__ = ["envelope_table", "envelope_to_json", "envelope_to_toml", "load_envelope", "save_envelope"]
 
 
 def load_envelope(path: str | os.PathLike[str]) -> PerformanceEnvelope:
@@ -55,3 +56,29 @@ def save_envelope(
     chosen = format or ("json" if Path(path).suffix.lower() == ".json" else "toml")
     text = envelope_to_json(envelope) if chosen == "json" else envelope_to_toml(envelope)
     atomic_write_text(path, text)
+
+
+def envelope_table(envelope: PerformanceEnvelope) -> str:
+    """The envelope's parameters and first-quadrant corner points as text."""
+    rows = [
+        [field, format_value(getattr(envelope, field)), si_unit(field, envelope.joint)]
+        for field in ENVELOPE_FIELDS
+    ]
+    parts = []
+    title = f"{envelope.name} ({envelope.joint})" if envelope.name else f"envelope ({envelope.joint})"
+    parts.append(title)
+    parts.append(format_table(["parameter", "value", "unit"], rows))
+    v_unit, e_unit = si_unit("max_actuator_velocity", envelope.joint), si_unit("max_effort", envelope.joint)
+    extent = None
+    if math.isinf(envelope.no_load_velocity()):
+        extent = 1.0
+    corners = envelope.corners(velocity_extent=extent)
+    corner_rows = [["stall", *map(format_value, corners.stall)]]
+    if corners.corner is not None:
+        corner_rows.append(["corner (both curves bind)", *map(format_value, corners.corner)])
+    no_load = (envelope.no_load_velocity(), 0.0)
+    corner_rows.append(["no-load", *map(format_value, no_load)])
+    parts.append("")
+    parts.append("corner points (first quadrant; the region is symmetric in velocity and effort)")
+    parts.append(format_table(["point", f"velocity [{v_unit}]", f"effort [{e_unit}]"], corner_rows))
+    return "\n".join(parts)

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 if sys.version_info >= (3, 11):
     import tomllib

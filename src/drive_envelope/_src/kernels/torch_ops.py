@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
     import torch

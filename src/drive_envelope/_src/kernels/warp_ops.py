@@ -18,8 +18,8 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
-from drive_envelope._src.kernels.warp_kernels import build, warp_module
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.kernels.warp_funcs import build, warp_module
 
 __all__ = [
     "EnvelopeArrays",

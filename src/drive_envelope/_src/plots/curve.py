@@ -14,8 +14,8 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope.errors import InputError
 
 __all__ = ["BoundaryLine", "CornerPoint", "EnvelopeCurve", "envelope_curve"]
 

@@ -18,10 +18,10 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.plots.curve import EnvelopeCurve, envelope_curve
-from drive_envelope._src.teststand.trajectory import Trajectory
-from drive_envelope.errors import InputError
+from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = ["FIGURE_SUFFIXES", "EnvelopePlot", "plot_envelope", "save_figure"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 __all__ = ["envelope_from_argument"]
 
@@ -34,7 +34,7 @@ def envelope_from_argument(spec: str) -> PerformanceEnvelope:
     """
     path = Path(spec)
     if _is_scenario(path):
-        from drive_envelope._src.teststand.scenario import load_scenario
+        from drive_envelope._src.scenario.spec import load_scenario
 
         envelope = load_scenario(path).effective_envelope()
         if envelope is None:

@@ -18,8 +18,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from drive_envelope._src.errors import DriveEnvelopeError
 from drive_envelope._src.io.atomic import atomic_write_text
-from drive_envelope.errors import DriveEnvelopeError
 
 __all__ = [
     "BUILD_COMMAND",

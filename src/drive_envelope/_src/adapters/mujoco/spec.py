@@ -23,8 +23,8 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.units import to_si
-from drive_envelope.errors import InputError
 
 if TYPE_CHECKING:
     import mujoco

@@ -22,8 +22,8 @@ import numpy as np
 
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import Scenario
-from drive_envelope._src.teststand.trajectory import Trajectory
+from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import mujoco

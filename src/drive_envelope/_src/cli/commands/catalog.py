@@ -24,9 +24,9 @@ def register(subparsers: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     import json
 
-    from drive_envelope._src.cli.common import format_table, format_value
     from drive_envelope._src.datasheet.catalog import catalog_entries, catalog_text, load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
+    from drive_envelope._src.format import format_table, format_value
 
     if args.name:
         print(catalog_text(args.name), end="")

@@ -66,7 +66,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.io.atomic import atomic_write_text
 
     if args.json and args.format and not args.output:
-        from drive_envelope.errors import InputError
+        from drive_envelope._src.errors import InputError
 
         raise InputError("--json and --format both print to stdout: add --output PATH for the envelope file")
     overrides = _overrides(args.set)
@@ -101,7 +101,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _overrides(items: list[str]) -> dict[str, object]:
     """``SECTION.KEY=VALUE`` strings -> mapping; a plain number stays a number (SI)."""
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.errors import InputError
 
     result: dict[str, object] = {}
     for item in items:
@@ -120,7 +120,7 @@ def _overrides(items: list[str]) -> dict[str, object]:
 def _check_not_a_path(spec: str) -> None:
     from pathlib import Path
 
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.errors import InputError
 
     if Path(spec).suffix.lower() in (".toml", ".json", ".yaml", ".yml") or "/" in spec:
         raise InputError(f"{spec}: no such file")
@@ -129,7 +129,7 @@ def _check_not_a_path(spec: str) -> None:
 def _toml(text: str, source: str) -> dict[str, Any]:
     import tomllib
 
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.errors import InputError
 
     try:
         return tomllib.loads(text)

@@ -25,8 +25,7 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import envelope_table
-    from drive_envelope._src.io.envelope_file import envelope_to_json, load_envelope
+    from drive_envelope._src.io.envelope_file import envelope_table, envelope_to_json, load_envelope
 
     envelope = load_envelope(args.file)
     if args.json:

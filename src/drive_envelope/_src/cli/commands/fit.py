@@ -63,9 +63,9 @@ def register(subparsers: Any) -> None:
 
 def _fixed(items: list[str], joint: str) -> dict[str, float]:
     from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
-    from drive_envelope._src.envelope.parse import nearest_key, read_quantity
+    from drive_envelope._src.errors import InputError
     from drive_envelope._src.params.table import si_unit
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.values import nearest_key, read_quantity
 
     fixed = {}
     for item in items:

@@ -43,7 +43,7 @@ def register(subparsers: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.plots.figure import plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
-    from drive_envelope._src.teststand.trajectory import read_trajectory
+    from drive_envelope._src.scenario.trajectory import read_trajectory
 
     envelope = envelope_from_argument(args.envelope)
     trajectories = [read_trajectory(path, joint=envelope.joint) for path in args.trajectory]

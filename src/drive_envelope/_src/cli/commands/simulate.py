@@ -44,13 +44,13 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drive_envelope._src.teststand.engines import simulate
-    from drive_envelope._src.teststand.scenario import load_scenario
-    from drive_envelope._src.teststand.trajectory import (
+    from drive_envelope._src.scenario.spec import load_scenario
+    from drive_envelope._src.scenario.trajectory import (
         save_trajectory,
         trajectory_to_csv,
         trajectory_to_json,
     )
+    from drive_envelope._src.teststand.engines import simulate
 
     scenario = load_scenario(args.file, args.overrides)
     trajectory = simulate(scenario, args.engine)

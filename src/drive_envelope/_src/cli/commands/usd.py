@@ -54,15 +54,9 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 def _apply(args: argparse.Namespace) -> int:
     import sys
 
-    from drive_envelope._src.usd.apply import (
-        apply_envelopes,
-        match_map,
-        open_stage,
-        read_map,
-        resolve_source,
-        save_stage,
-    )
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.adapters.usd.apply import apply_envelopes, match_map, read_map, resolve_source
+    from drive_envelope._src.adapters.usd.stage import open_stage, save_stage
+    from drive_envelope._src.errors import InputError
 
     if args.joint is not None and args.datasheet is None and args.envelope is None:
         raise InputError("usd apply --joint: needs --datasheet FILE or --envelope FILE")
@@ -93,7 +87,7 @@ def _check_output(output: str) -> None:
     """Refuse an output name USD cannot write before any work is done."""
     from pathlib import Path
 
-    from drive_envelope.errors import InputError
+    from drive_envelope._src.errors import InputError
 
     if Path(output).suffix.lower() not in (".usd", ".usda", ".usdc"):
         raise InputError(f"--output {output!r}: expected a .usd, .usda or .usdc file name")
@@ -102,7 +96,7 @@ def _check_output(output: str) -> None:
 
 
 def _summary(envelope: Any) -> str:
-    from drive_envelope._src.cli.common import format_value
+    from drive_envelope._src.format import format_value
     from drive_envelope._src.params.table import si_unit
 
     parts = [
@@ -121,9 +115,9 @@ def _show(args: argparse.Namespace) -> int:
     import json
     import math
 
-    from drive_envelope._src.cli.common import format_table, format_value
-    from drive_envelope._src.usd.apply import open_stage
-    from drive_envelope._src.usd.authoring import list_drives, stage_units
+    from drive_envelope._src.adapters.usd.authoring import list_drives
+    from drive_envelope._src.adapters.usd.stage import open_stage, stage_units
+    from drive_envelope._src.format import format_table, format_value
 
     stage = open_stage(args.asset)
     records = list_drives(stage)

@@ -13,11 +13,11 @@ import importlib.util
 from types import ModuleType
 from typing import TYPE_CHECKING
 
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
-    from drive_envelope._src.teststand.scenario import Scenario
-    from drive_envelope._src.teststand.trajectory import Trajectory
+    from drive_envelope._src.scenario.spec import Scenario
+    from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = ["ENGINES", "ENGINE_EXTRAS", "engine_module", "engine_names", "simulate"]
 

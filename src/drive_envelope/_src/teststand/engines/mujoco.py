@@ -6,8 +6,8 @@ and the built plugin (``python -m drive_envelope._src.adapters.mujoco.build``).
 
 from __future__ import annotations
 
-from drive_envelope._src.teststand.scenario import Scenario
-from drive_envelope._src.teststand.trajectory import Trajectory
+from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = ["simulate"]
 

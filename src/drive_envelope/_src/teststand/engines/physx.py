@@ -3,7 +3,7 @@
 The scenario is authored as a USD stage (a fixed-base articulation with one revolute or prismatic
 joint, drive + PhysxDrivePerformanceEnvelopeAPI written by :mod:`drive_envelope.usd`, the
 scenario's solver type and iteration counts, zero link damping, ``cfmScale`` 0, no gravity) and
-stepped by PhysX in this process (see :mod:`drive_envelope._src.usd.physx_runner`). The CSV has
+stepped by PhysX in this process (see :mod:`drive_envelope._src.adapters.physx.runner`). The CSV has
 the same columns as the reference engine's: row 0 the initial state, then per step the joint
 position and velocity and PhysX's projected joint force, the total actuator effort (drive +
 applied).
@@ -19,10 +19,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from drive_envelope._src.teststand.scenario import Scenario
-from drive_envelope._src.teststand.trajectory import Trajectory
-from drive_envelope._src.usd.scale import StageUnits
-from drive_envelope.errors import InputError
+from drive_envelope._src.adapters.usd.scale import StageUnits
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = ["simulate", "simulate_many"]
 
@@ -47,8 +47,8 @@ def simulate_many(scenarios: Sequence[Scenario], *, units: StageUnits | None = N
             an unlimited drive), or ovphysx >= 0.7 / physx-usd-schemas missing.
         DriveEnvelopeError: PhysX itself failed.
     """
-    from drive_envelope._src.usd.physx_runner import PhysxJob, run_jobs
-    from drive_envelope._src.usd.teststand_scene import build_teststand_stage
+    from drive_envelope._src.adapters.physx.runner import PhysxJob, run_jobs
+    from drive_envelope._src.adapters.physx.scene import build_teststand_stage
 
     units = units or StageUnits()
     jobs = []
@@ -84,7 +84,7 @@ def _check(scenario: Scenario) -> None:
 
 
 def _trajectory(scenario: Scenario, result: object) -> Trajectory:
-    from drive_envelope._src.usd.physx_runner import PhysxResult
+    from drive_envelope._src.adapters.physx.runner import PhysxResult
 
     assert isinstance(result, PhysxResult)
     sim = scenario.simulation

@@ -33,9 +33,9 @@ import numpy as np
 from drive_envelope._src.envelope.clamp import clamp_drive_impulse
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope._src.teststand.scenario import Scenario
-from drive_envelope._src.teststand.trajectory import Trajectory
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = [
     "ImplicitDriveDesc",

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import fnmatch
 import os
-import shutil
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -24,12 +23,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["AppliedDrive", "MapEntry", "apply_envelopes", "open_stage", "read_map", "save_stage"]
+__all__ = ["AppliedDrive", "MapEntry", "apply_envelopes", "match_map", "read_map"]
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -56,59 +55,6 @@ class AppliedDrive:
     """The envelope written (SI)."""
     warnings: tuple[str, ...] = ()
     """Authoring warnings for this joint."""
-
-
-def open_stage(path: str | os.PathLike[str]) -> Usd.Stage:
-    """Open a USD file with the PhysX schemas registered.
-
-    Raises:
-        InputError: missing file, or a file USD cannot read.
-    """
-    file = Path(path)
-    if not file.is_file():
-        raise InputError(f"{file}: no such file")
-    register_schemas()
-    from pxr import Sdf, Tf, Usd
-
-    try:
-        cached = Sdf.Layer.Find(str(file))
-        if cached is not None:
-            cached.Reload(force=True)  # the file on disk, not edits an earlier failed run left in memory
-        stage = Usd.Stage.Open(str(file))
-    except Tf.ErrorException as exc:
-        raise InputError(f"{file}: USD cannot open it: {' '.join(str(exc).split())[:300]}") from None
-    if stage is None:
-        raise InputError(f"{file}: USD cannot open it")
-    return stage
-
-
-def register_schemas() -> None:
-    """Make the codeless PhysX schemas known to USD (``import physx_usd_schemas`` registers them).
-
-    Raises:
-        InputError: usd-core or physx-usd-schemas is not installed.
-    """
-    try:
-        import physx_usd_schemas  # noqa: F401 - registers the schema plugins on import
-        from pxr import Usd  # noqa: F401
-    except ImportError as exc:
-        raise InputError(
-            f"USD support needs the 'usd' extra (pip install 'drive-envelope[usd]'): missing {exc.name!r}"
-        ) from None
-
-
-def save_stage(stage: Usd.Stage, output: str | os.PathLike[str]) -> None:
-    """Write the stage's root layer to ``output`` atomically (a temporary file renamed over it)."""
-    from drive_envelope._src.io.atomic import atomic_path
-
-    target = Path(output)
-    if target.suffix.lower() not in (".usd", ".usda", ".usdc"):
-        raise InputError(f"--output {str(output)!r}: expected a .usd, .usda or .usdc file name")
-    with atomic_path(target) as tmp:
-        if not stage.GetRootLayer().Export(str(tmp)):
-            raise InputError(f"{target}: USD could not write the file")
-        if target.exists():
-            shutil.copymode(target, tmp)  # the temporary file is 0600; keep the asset's permissions
 
 
 def read_map(path: str | os.PathLike[str]) -> list[MapEntry]:
@@ -175,7 +121,7 @@ def _joint_paths(stage: Usd.Stage) -> list[str]:
     """Paths of the joints that can carry an envelope (revolute, prismatic, D6)."""
     from pxr import UsdPhysics
 
-    from drive_envelope._src.usd.authoring import joint_kind
+    from drive_envelope._src.adapters.usd.authoring import joint_kind
 
     paths = []
     for prim in stage.Traverse():
@@ -194,10 +140,10 @@ def apply_envelopes(
     """Write each ``(joint_path, envelope, instance)`` on the stage, collecting the warnings per joint.
 
     Raises:
-        InputError: from :func:`~drive_envelope._src.usd.authoring.write_envelope`; the stage may then
-            be partly edited in memory, so callers write nothing.
+        InputError: from :func:`~drive_envelope._src.adapters.usd.authoring.write_envelope`; the stage may
+            then be partly edited in memory, so callers write nothing.
     """
-    from drive_envelope._src.usd.authoring import write_envelope
+    from drive_envelope._src.adapters.usd.authoring import write_envelope
 
     results = []
     for joint_path, envelope, instance in assignments:

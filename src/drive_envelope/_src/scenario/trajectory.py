@@ -21,9 +21,9 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import JointType
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_write_text
 from drive_envelope._src.io.files import read_text
-from drive_envelope.errors import InputError
 
 __all__ = [
     "COLUMNS",

@@ -9,7 +9,7 @@ What PhysX 5.6 reads (``omni.physx`` ``usdLoad/Joint.cpp``):
 * instances: ``angular`` on revolute joints, ``linear`` on prismatic joints, ``rotX|rotY|rotZ`` on
   D6 (generic) joints; PhysX does not read the envelope on D6 ``transX|Y|Z`` axes;
 * angular instances store degrees (deg/s, N*m*s/deg, (deg/s)/(N*m)); every effort is in stage units
-  (``metersPerUnit``, ``kilogramsPerUnit``), see :mod:`drive_envelope._src.usd.scale`;
+  (``metersPerUnit``, ``kilogramsPerUnit``), see :mod:`drive_envelope._src.adapters.usd.scale`;
 * only joints inside an articulation (a body under ``PhysicsArticulationRootAPI``) keep it.
 
 USD stores these attributes as 32-bit floats: a written value reads back to within float32
@@ -23,9 +23,10 @@ import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from drive_envelope._src.adapters.usd.scale import ANGULAR_INSTANCES, LINEAR_INSTANCES, StageUnits, is_angular
+from drive_envelope._src.adapters.usd.stage import stage_units
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
-from drive_envelope._src.usd.scale import ANGULAR_INSTANCES, LINEAR_INSTANCES, StageUnits, is_angular
-from drive_envelope.errors import InputError
+from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
     from pxr import Usd
@@ -38,7 +39,6 @@ __all__ = [
     "list_drives",
     "read_envelope",
     "resolve_joint",
-    "stage_units",
     "write_envelope",
 ]
 
@@ -87,16 +87,6 @@ class DriveRecord:
 # -- stage helpers ------------------------------------------------------------------------------------
 
 
-def stage_units(stage: Usd.Stage) -> StageUnits:
-    """The stage's ``metersPerUnit`` and ``kilogramsPerUnit`` (USD fallbacks 0.01 and 1)."""
-    from pxr import UsdGeom, UsdPhysics
-
-    return StageUnits(
-        meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
-        kilograms_per_unit=float(UsdPhysics.GetStageKilogramsPerUnit(stage)),
-    )
-
-
 def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
     """The joint prim named by ``joint_path`` (absolute, or relative to a given prim).
 
@@ -108,7 +98,7 @@ def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
     Raises:
         InputError: no such prim, or the prim is not a UsdPhysics joint.
     """
-    from drive_envelope._src.usd.apply import register_schemas
+    from drive_envelope._src.adapters.usd.stage import register_schemas
 
     register_schemas()  # idempotent; the schema registry must know PhysxDrivePerformanceEnvelopeAPI
     from pxr import Sdf, Usd, UsdPhysics

@@ -29,25 +29,10 @@ import math
 from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
-from drive_envelope._src.envelope.parse import nearest_key
-from drive_envelope._src.params.table import si_unit
-from drive_envelope._src.units import to_si
-from drive_envelope.errors import InputError, UnitsError
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.values import nearest_key, read_envelope_value
 
-__all__ = ["build", "read_envelope_value", "resolve_envelope_arguments"]
-
-
-def read_envelope_value(value: object, field: str, where: str) -> float:
-    """An SI number, or a string with units of a revolute or prismatic joint (the dimension decides)."""
-    if not isinstance(value, str):
-        return to_si(value, si_unit(field, "revolute"), where)
-    try:
-        return to_si(value, si_unit(field, "revolute"), where)
-    except UnitsError as revolute_error:
-        try:
-            return to_si(value, si_unit(field, "prismatic"), where)
-        except UnitsError:
-            raise revolute_error from None  # the revolute message explains angle units
+__all__ = ["build", "resolve_envelope_arguments"]
 
 
 def resolve_envelope_arguments(args: dict[str, Any]) -> dict[str, float]:
@@ -93,7 +78,7 @@ def build() -> type:
     import warp as wp
     from newton.actuators import ClampingBase
 
-    from drive_envelope._src.kernels.warp_kernels import build as build_warp
+    from drive_envelope._src.kernels.warp_funcs import build as build_warp
 
     clamp_effort_func = build_warp().clamp_effort_func
 

@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
-from drive_envelope._src.kernels.newton_clamp import read_envelope_value
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.torch_ops import clamp_effort, resolve_dtype
-from drive_envelope.errors import InputError
+from drive_envelope._src.values import read_envelope_value
 
 if TYPE_CHECKING:
     import torch

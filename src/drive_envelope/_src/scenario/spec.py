@@ -24,10 +24,10 @@ from typing import Any, Literal
 
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
-from drive_envelope._src.envelope.parse import nearest_key, read_quantity
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.units import to_si
-from drive_envelope.errors import InputError
+from drive_envelope._src.values import nearest_key, read_quantity
 
 __all__ = [
     "DriveSpec",

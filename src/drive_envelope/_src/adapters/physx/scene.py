@@ -10,7 +10,7 @@ Layout (``metersPerUnit`` / ``kilogramsPerUnit`` as given, Z up, no gravity)::
 
 The link has zero linear and angular damping and ``cfmScale`` 0, and the joint no friction, no
 armature and no velocity cap, so the drive and the envelope are the only actuator physics; the
-envelope is authored with :func:`~drive_envelope._src.usd.authoring.write_envelope` (the same code
+envelope is authored with :func:`~drive_envelope._src.adapters.usd.authoring.write_envelope` (the same code
 path as ``drive-envelope usd apply``).
 """
 
@@ -20,12 +20,12 @@ import math
 import os
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.usd.scale import StageUnits
+from drive_envelope._src.adapters.usd.scale import StageUnits
 
 if TYPE_CHECKING:
     from pxr import Usd
 
-    from drive_envelope._src.teststand.scenario import Scenario
+    from drive_envelope._src.scenario.spec import Scenario
 
 __all__ = ["ARTICULATION_PATH", "JOINT_PATH", "LINK_PATH", "build_teststand_stage"]
 
@@ -51,7 +51,7 @@ def build_teststand_stage(
     Returns:
         The stage.
     """
-    from drive_envelope._src.usd.apply import register_schemas
+    from drive_envelope._src.adapters.usd.stage import register_schemas
 
     register_schemas()
     from pxr import Sdf, Usd, UsdGeom, UsdPhysics
@@ -148,7 +148,7 @@ def _define_body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[flo
 def _define_joint(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
     from pxr import Sdf, UsdPhysics
 
-    from drive_envelope._src.usd.authoring import write_envelope
+    from drive_envelope._src.adapters.usd.authoring import write_envelope
 
     revolute = scenario.joint.type == "revolute"
     if revolute:

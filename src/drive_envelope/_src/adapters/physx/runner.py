@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.usd.teststand_scene import ARTICULATION_PATH, JOINT_PATH, LINK_PATH
-from drive_envelope.errors import DriveEnvelopeError, InputError
+from drive_envelope._src.adapters.physx.scene import ARTICULATION_PATH, JOINT_PATH, LINK_PATH
+from drive_envelope._src.errors import DriveEnvelopeError, InputError
 
 __all__ = ["PhysxJob", "PhysxResult", "cache_folder", "inspect_drives", "run_jobs"]
 
@@ -258,7 +258,7 @@ def inspect_drives(usd_path: str | os.PathLike[str]) -> dict[str, dict[str, floa
         gets ``path[axis]`` keys). Values are PhysX's after its USD parsing, folded back by ovphysx
         to USD's units: angular DOFs per degree (deg/s, N*m*s/deg, (deg/s)/(N*m), stiffness per
         degree), lengths and masses in stage units. Divide by the
-        :class:`~drive_envelope._src.usd.scale.StageUnits` factors for SI.
+        :class:`~drive_envelope._src.adapters.usd.scale.StageUnits` factors for SI.
 
     Raises:
         InputError: the file does not exist, or ovphysx (>= 0.7) is missing.
