@@ -69,10 +69,11 @@ def test_derive_report_marks_the_binding_limit(tmp_path: Path, capsys: pytest.Ca
 def test_round_trip_derive_envelope_show(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Write the envelope with --format toml --output and read it back with `envelope show`."""
     out_file = tmp_path / "env.toml"
-    code, out, _ = run(
+    code, out, err = run(
         capsys, "derive", str(write(tmp_path, AK80)), "--format", "toml", "--output", str(out_file)
     )
-    assert code == 0 and out_file.exists() and "wrote" in out
+    assert code == 0 and out_file.exists() and "wrote" in err and "wrote" not in out
+    assert out == out_file.read_text(encoding="utf-8")  # stdout stays the envelope file itself
     code, shown, _ = run(capsys, "envelope", "show", str(out_file), "--json")
     assert code == 0
     data = json.loads(shown)
@@ -85,8 +86,8 @@ def test_round_trip_derive_envelope_show(tmp_path: Path, capsys: pytest.CaptureF
 def test_json_format_to_stdout_is_an_envelope_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Print an envelope file (not the derivation) with --format json and no --output."""
-    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--format", "json")
+    """Print an envelope file (not the derivation) with --format envelope-json and no --output."""
+    code, out, _ = run(capsys, "derive", str(write(tmp_path, AK80)), "--format", "envelope-json")
     assert code == 0
     data = json.loads(out)
     assert set(data) == {
@@ -278,7 +279,19 @@ def test_json_and_yaml_datasheets(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(12.05568)
 
 
-def test_json_with_format_needs_output(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """Refuse --json with --format and no --output (both would go to stdout)."""
-    code, _, err = run(capsys, "derive", str(write(tmp_path, AK80)), "--json", "--format", "toml")
-    assert code == 2 and "--output" in err
+def test_json_is_short_for_format_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Print the same derivation object with --json as with --format json (one flag, two spellings)."""
+    sheet = str(write(tmp_path, AK80))
+    code, short, _ = run(capsys, "derive", sheet, "--json")
+    assert code == 0
+    code, long, _ = run(capsys, "derive", sheet, "--format", "json")
+    assert code == 0 and short == long and "max_effort_limits" in json.loads(short)
+
+
+def test_empty_or_folder_output_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Refuse --output '' and an existing folder with one line instead of ignoring or crashing."""
+    sheet = str(write(tmp_path, AK80))
+    code, _, err = run(capsys, "derive", sheet, "--output", "")
+    assert code == 2 and "expected a file name" in err
+    code, _, err = run(capsys, "derive", sheet, "-o", str(tmp_path))
+    assert code == 2 and "is a folder" in err

@@ -57,7 +57,7 @@ CASES = [
 @pytest.fixture(scope="module")
 def runs() -> list[object]:
     """The cases in a centimetre-gram stage (the parity tests cover SI stages)."""
-    from drive_envelope._src.teststand.engines.physx import simulate_many
+    from drive_envelope._src.adapters.physx.stand import simulate_many
     from drive_envelope.usd import StageUnits
 
     with warnings.catch_warnings():

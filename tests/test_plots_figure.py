@@ -44,12 +44,15 @@ def test_plot_envelope_returns_a_handle_with_the_boundary_drawn() -> None:
 
 def test_trajectory_adds_points_and_a_time_panel() -> None:
     """With a trajectory the plane gets its points (coloured by time) and a velocity/effort panel."""
-    from drive_envelope.plots import plot_envelope
+    from drive_envelope.plots import OperatingPoints, plot_envelope
 
     trajectory = simulate(load_scenario(SCENARIO, ["simulation.duration=0.2"]))
     mask = np.zeros(len(trajectory), dtype=bool)
     mask[3] = True
-    plot = plot_envelope(ENV, trajectory=trajectory, highlight=mask)
+    points = OperatingPoints(
+        velocity=trajectory.velocity, effort=trajectory.effort, time=trajectory.time, label=trajectory.name
+    )
+    plot = plot_envelope(ENV, points=points, highlight=mask)
     assert len(plot.axes) == 3
     points = plot.lines[f"points:{trajectory.name}"][0]
     np.testing.assert_allclose(
@@ -68,14 +71,38 @@ def test_plot_into_given_axes_and_bad_highlight() -> None:
     """ax= draws into an existing axes; a mask of the wrong length raises InputError."""
     from matplotlib.figure import Figure
 
-    from drive_envelope.plots import plot_envelope
+    from drive_envelope.plots import OperatingPoints, plot_envelope
 
     ax = Figure().add_subplot()
     plot = plot_envelope(ENV, ax=ax)
     assert plot.axes == (ax,)
     trajectory = simulate(load_scenario(SCENARIO, ["simulation.duration=0.05"]))
+    points = OperatingPoints(velocity=trajectory.velocity, effort=trajectory.effort, time=trajectory.time)
     with pytest.raises(InputError, match="highlight must be a boolean mask"):
-        plot_envelope(ENV, trajectory=trajectory, highlight=[True])
+        plot_envelope(ENV, points=points, highlight=[True])
+
+
+def test_points_without_time_use_the_sample_index() -> None:
+    """Colour a log without a time column by sample index, and label the time panel 'sample'."""
+    from drive_envelope.plots import OperatingPoints, plot_envelope
+
+    points = OperatingPoints(velocity=[0.0, 1.0, 2.0], effort=[5.0, 4.0, 3.0], label="bench")
+    plot = plot_envelope(ENV, points=points)
+    np.testing.assert_allclose(plot.lines["points:bench"][0].get_array(), [0.0, 1.0, 2.0])
+    assert plot.axes[1].get_xlabel() == "sample"
+    with pytest.raises(InputError, match="one length"):
+        OperatingPoints(velocity=[0.0, 1.0], effort=[1.0])
+
+
+def test_plot_takes_repeated_trajectory_options(tmp_path: Path) -> None:
+    """Accept `plot -t a.csv -t b.csv ENV -o x.png` (a repeatable option, not a greedy list)."""
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for path, velocity in ((a, "1"), (b, "2")):
+        assert main(["simulate", str(SCENARIO), "-o", str(path), "--set", f"drive.target_velocity={velocity}",
+                     "--set", "simulation.duration=0.1"]) == 0  # fmt: skip
+    figure = tmp_path / "x.png"
+    assert main(["plot", "-t", str(a), "-t", str(b), str(SCENARIO), "-o", str(figure)]) == 0
+    assert figure.stat().st_size > 0
 
 
 @pytest.mark.parametrize("suffix", [".png", ".svg", ".pdf"])

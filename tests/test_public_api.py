@@ -102,6 +102,20 @@ def test_cli_help_is_light() -> None:
     assert _loaded_heavy(code) == []
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["derive", "--help"], ["check", "--bogus"], ["simulate"]])
+def test_cli_parser_loads_no_numpy(argv: list[str]) -> None:
+    """Answer --help and argument errors without NumPy or pint (the startup benchmark's goal)."""
+    code = (
+        "import contextlib, io, sys\n"
+        "from drive_envelope._src.cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
+        f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass\n"
+        "print(__import__('json').dumps([m for m in ('numpy', 'pint') if m in sys.modules]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert json.loads(out.strip().splitlines()[-1]) == []
+
+
 def test_glossary_is_fresh() -> None:
     """Regenerate docs/glossary.md from the parameter table and find no difference."""
     assert Path(GLOSSARY_PATH).read_text(encoding="utf-8") == render_glossary(), (

@@ -27,7 +27,7 @@ def test_simulate_writes_the_specified_csv(tmp_path: Path, capsys: pytest.Captur
     assert lines[1] == "0.0,0.0,0.0,0.0"
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     assert data[-1, 2] == pytest.approx(3.0, abs=1e-12)  # saturates exactly at max_actuator_velocity
-    assert "wrote 121 rows" in capsys.readouterr().out
+    assert "wrote 121 rows" in capsys.readouterr().err  # status lines go to stderr
 
 
 def test_simulate_json_and_overrides(tmp_path: Path) -> None:

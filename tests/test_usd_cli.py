@@ -42,7 +42,7 @@ def test_apply_map_writes_every_joint(
         main(["usd", "apply", str(robot), "--map", str(robot.with_name("map.toml")), "--output", str(out)])
         == 0
     )
-    assert "wrote 3 drive(s)" in capsys.readouterr().out
+    assert "wrote 3 drive(s)" in capsys.readouterr().err  # status lines go to stderr
     assert robot.read_bytes() == before  # --output leaves the input alone
     drives = _show(out, capsys)
     shoulder, slide = drives["/Robot/joints/shoulder"]["envelope"], drives["/Robot/joints/slide"]["envelope"]

@@ -23,12 +23,8 @@ from drive_envelope._src.analysis.logs import (
     read_log,
     source_label,
 )
-from drive_envelope._src.analysis.mapping import (
-    JointMapping,
-    is_mapping_file,
-    load_joint_mapping,
-    resolve_spec,
-)
+from drive_envelope._src.analysis.mapping import JointMapping, is_mapping_file, load_joint_mapping
+from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -53,7 +49,7 @@ def resolve_envelopes(spec: EnvelopeSource) -> PerformanceEnvelope | JointMappin
         return JointMapping.from_envelopes(spec)
     if is_mapping_file(spec):
         return load_joint_mapping(spec)
-    return resolve_spec(os.fspath(spec))
+    return resolve_envelope(spec)
 
 
 def check_log(

@@ -22,11 +22,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 
-__all__ = ["JointMapping", "is_mapping_file", "load_joint_mapping", "resolve_spec"]
+__all__ = ["JointMapping", "is_mapping_file", "load_joint_mapping"]
 
 _MAPPING_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 
@@ -66,19 +67,6 @@ class JointMapping:
         return cls(entries=tuple(envelopes.items()), source=source)
 
 
-def resolve_spec(spec: str, *, base: Path | None = None) -> PerformanceEnvelope:
-    """Envelope of an envelope file, datasheet file or catalog name (paths relative to ``base``)."""
-    if base is not None and not Path(spec).is_absolute() and (base / spec).is_file():
-        spec = str(base / spec)
-    try:
-        from drive_envelope._src.datasheet.resolve import resolve_envelope
-    except ImportError:  # the datasheet layer is optional for this module: fall back to envelope files
-        from drive_envelope._src.io.envelope_file import load_envelope
-
-        return load_envelope(spec)
-    return resolve_envelope(spec)
-
-
 def is_mapping_file(path: str | os.PathLike[str]) -> bool:
     """Whether ``path`` is a joint mapping file (a readable table file with a ``joints`` table)."""
     file = Path(path)
@@ -111,10 +99,7 @@ def load_joint_mapping(path: str | os.PathLike[str]) -> JointMapping:
         if isinstance(value, Mapping):
             envelope = envelope_from_mapping(value, source=where)
         elif isinstance(value, str) and value.strip():
-            try:
-                envelope = resolve_spec(value, base=file.parent)
-            except InputError as exc:
-                raise InputError(f"{where}: {exc}") from None
+            envelope = resolve_envelope(value, base=file.parent, where=where)
         else:
             raise InputError(
                 f"{where}: expected an envelope file, datasheet, catalog name or inline table, got {value!r}"

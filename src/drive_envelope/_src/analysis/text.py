@@ -133,8 +133,8 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
     except ImportError:
         raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
 
+    from drive_envelope._src.plots.curve import OperatingPoints
     from drive_envelope._src.plots.figure import plot_envelope, save_figure
-    from drive_envelope._src.scenario.trajectory import Trajectory
 
     target = Path(path)
     written = []
@@ -142,18 +142,13 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
         points = check.points
         if points is None:
             raise InputError("plot: the check kept no points (CheckOptions.keep_points = 0)")
-        trajectory = Trajectory(
-            time=points.time,
-            position=points.time * 0.0,
-            velocity=points.velocity,
-            effort=points.effort,
-            joint=check.envelope.joint,
-            name=check.joint,
+        samples = OperatingPoints(
+            velocity=points.velocity, effort=points.effort, time=points.time, label=check.joint
         )
         figure = Figure(figsize=(7.0, 6.4), layout="constrained")
         axes = figure.add_subplot(111)
         plot = plot_envelope(
-            check.envelope, trajectory=trajectory, ax=axes, highlight=points.outside, title=check.joint
+            check.envelope, points=samples, ax=axes, highlight=points.outside, title=check.joint
         )
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in check.joint)
         out = target if len(report.joints) == 1 else target.with_name(f"{target.stem}-{safe}{target.suffix}")

@@ -1,46 +1,46 @@
-"""The ``drive-envelope`` command line: subcommands discovered in ``_src/cli/commands``.
+"""The ``drive-envelope`` command line: every subcommand, registered explicitly in :data:`COMMANDS`.
 
-Every user mistake ends in one line on stderr (``drive-envelope: error: ...``) and exit status 2.
+Every user mistake ends in one line on stderr (``drive-envelope: error: ...``) and exit status 2. A
+bug ends in one line too (exit 1), with a hint to report it; ``DRIVE_ENVELOPE_TRACEBACK=1`` shows
+the traceback. Building the parser imports only the command modules, which import their work
+lazily, so ``--help`` and argument errors load neither NumPy nor an engine.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
-import pkgutil
+import os
 import sys
 from collections.abc import Sequence
 
+from drive_envelope._src.cli.commands import catalog, check, derive, envelope, fit, plot, simulate, usd
+from drive_envelope._src.cli.common import PROG
 from drive_envelope._src.errors import DriveEnvelopeError
+from drive_envelope._src.version import VERSION
 
-__all__ = ["build_parser", "main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
 
-PROG = "drive-envelope"
+COMMANDS = (derive, catalog, envelope, simulate, plot, usd, check, fit)
+"""The subcommand modules, in the order ``--help`` lists them; each has ``register(subparsers)``."""
+
+_ISSUES = "https://github.com/drive-envelope/drive-envelope/issues"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser, with every subcommand module registered."""
-    from drive_envelope._src.cli import commands
-    from drive_envelope._src.version import VERSION as __version__
-
+    """The full argument parser, with every subcommand of :data:`COMMANDS` registered."""
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="The PhysX drive performance envelope: derive, inspect, simulate, check.",
     )
-    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument("--version", action="version", version=f"{PROG} {VERSION}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    modules = [
-        importlib.import_module(f"{commands.__name__}.{info.name}")
-        for info in pkgutil.iter_modules(commands.__path__)
-        if not info.name.startswith("_")
-    ]
-    for module in sorted(modules, key=lambda m: (getattr(m, "ORDER", 100), m.__name__)):
+    for module in COMMANDS:
         module.register(subparsers)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; return the exit status (0 ok, 1 a check failed, 2 bad input)."""
+    """Run the CLI; return the exit status (0 ok, 1 a check failed or a bug, 2 bad input)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:
@@ -56,3 +56,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except Exception as exc:  # last resort: a bug, never a user mistake (those are InputError)
+        if os.environ.get("DRIVE_ENVELOPE_TRACEBACK"):
+            raise
+        detail = " ".join(str(exc).split())[:300]
+        print(
+            f"{PROG}: internal error: {type(exc).__name__}: {detail} (a bug: please report it at "
+            f"{_ISSUES} with the command; DRIVE_ENVELOPE_TRACEBACK=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return 1

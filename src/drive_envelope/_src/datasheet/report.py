@@ -14,7 +14,7 @@ from drive_envelope._src.params.table import si_unit
 
 __all__ = ["ENVELOPE_FORMATS", "derivation_report", "envelope_text", "usd_snippet"]
 
-ENVELOPE_FORMATS = ("toml", "json", "usd-snippet")
+ENVELOPE_FORMATS = ("toml", "envelope-json", "usd-snippet")
 _RAD_PER_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
 
@@ -159,8 +159,8 @@ def _usd_float(value: float) -> str:
 
 
 def envelope_text(envelope: PerformanceEnvelope, fmt: str) -> str:
-    """The envelope as ``toml`` or ``json`` (envelope files for the other commands) or ``usd-snippet``."""
-    if fmt == "json":
+    """The envelope as ``toml`` or ``envelope-json`` (envelope files) or as a ``usd-snippet``."""
+    if fmt == "envelope-json":
         return envelope_to_json(envelope)
     if fmt == "usd-snippet":
         return usd_snippet(envelope)

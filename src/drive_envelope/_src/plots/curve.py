@@ -17,7 +17,7 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["BoundaryLine", "CornerPoint", "EnvelopeCurve", "envelope_curve"]
+__all__ = ["BoundaryLine", "CornerPoint", "EnvelopeCurve", "OperatingPoints", "envelope_curve"]
 
 FloatArray = npt.NDArray[np.float64]
 _MARGIN = 1.15  # plot window beyond the region's extreme points
@@ -49,6 +49,47 @@ class CornerPoint:
     """Velocity of the point [rad/s or m/s]."""
     effort: float
     """Effort of the point [N*m or N]."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class OperatingPoints:
+    """Operating points to draw over an envelope: plain arrays of one length, one set per label.
+
+    Build one from any source: a simulated trajectory, a bench log, a check's kept samples.
+    """
+
+    velocity: FloatArray
+    """Joint velocity of each point [rad/s or m/s]."""
+    effort: FloatArray
+    """Total actuator effort of each point [N*m or N]."""
+    time: FloatArray | None = None
+    """Time of each point [s]; None colours the points by sample index instead."""
+    label: str = ""
+    """Legend label of the set, empty for ``points <n>``."""
+
+    def __post_init__(self) -> None:
+        velocity = np.asarray(self.velocity, dtype=np.float64)
+        effort = np.asarray(self.effort, dtype=np.float64)
+        time = None if self.time is None else np.asarray(self.time, dtype=np.float64)
+        shapes = {a.shape for a in (velocity, effort, time) if a is not None}
+        if len(shapes) != 1 or velocity.ndim != 1:
+            given = ", ".join(
+                f"{n} {a.shape}"
+                for n, a in (("velocity", velocity), ("effort", effort), ("time", time))
+                if a is not None
+            )
+            raise InputError(f"OperatingPoints: expected 1-D arrays of one length, got {given}")
+        object.__setattr__(self, "velocity", velocity)
+        object.__setattr__(self, "effort", effort)
+        object.__setattr__(self, "time", time)
+
+    def __len__(self) -> int:
+        return int(self.velocity.shape[0])
+
+    @property
+    def clock(self) -> FloatArray:
+        """``time``, or the sample index when there is no time [s or -]."""
+        return self.time if self.time is not None else np.arange(len(self), dtype=np.float64)
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)

@@ -20,8 +20,7 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
-from drive_envelope._src.plots.curve import EnvelopeCurve, envelope_curve
-from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.plots.curve import EnvelopeCurve, OperatingPoints, envelope_curve
 
 __all__ = ["FIGURE_SUFFIXES", "EnvelopePlot", "plot_envelope", "save_figure"]
 
@@ -59,16 +58,20 @@ def _matplotlib() -> Any:
     return Figure
 
 
-def _as_list(trajectory: Trajectory | Sequence[Trajectory] | None) -> list[Trajectory]:
-    if trajectory is None:
+def _as_list(points: OperatingPoints | Sequence[OperatingPoints] | None) -> list[OperatingPoints]:
+    if points is None:
         return []
-    if isinstance(trajectory, Trajectory):
-        return [trajectory]
-    return list(trajectory)
+    if isinstance(points, OperatingPoints):
+        return [points]
+    items = list(points)
+    for item in items:
+        if not isinstance(item, OperatingPoints):
+            raise InputError(f"points: expected OperatingPoints, got {type(item).__name__}")
+    return items
 
 
 def _window(
-    curve_or_envelope: EnvelopeCurve | PerformanceEnvelope, trajectories: list[Trajectory]
+    curve_or_envelope: EnvelopeCurve | PerformanceEnvelope, trajectories: list[OperatingPoints]
 ) -> EnvelopeCurve:
     """Curve data with a window that also holds every operating point."""
     if isinstance(curve_or_envelope, EnvelopeCurve):
@@ -87,7 +90,7 @@ def _window(
 def plot_envelope(
     curve_or_envelope: EnvelopeCurve | PerformanceEnvelope,
     *,
-    trajectory: Trajectory | Sequence[Trajectory] | None = None,
+    points: OperatingPoints | Sequence[OperatingPoints] | None = None,
     ax: Any = None,
     highlight: npt.ArrayLike | None = None,
     title: str | None = None,
@@ -97,10 +100,10 @@ def plot_envelope(
     Args:
         curve_or_envelope: Curve data from :func:`envelope_curve`, or an envelope (its window then
             grows to hold every operating point).
-        trajectory: One or more trajectories; their ``(velocity, effort)`` points are drawn coloured
-            by time, and, when ``ax`` is None, a second panel shows velocity and effort against time.
+        points: One or more sets of operating points (plain arrays); they are drawn coloured by
+            time, and, when ``ax`` is None, a second panel shows velocity and effort against time.
         ax: A matplotlib axes to draw the (velocity, effort) plane into; None creates a figure.
-        highlight: Boolean mask over the points of the (first) trajectory; True points are marked
+        highlight: Boolean mask over the first set of points; True points are marked
             in red (e.g. samples that violate the envelope).
         title: Figure title; default the envelope's name.
 
@@ -108,10 +111,10 @@ def plot_envelope(
         The :class:`EnvelopePlot` handle.
 
     Raises:
-        InputError: matplotlib is missing, or ``highlight`` does not match the trajectory.
+        InputError: matplotlib is missing, or ``highlight`` does not match the points.
     """
     figure_cls = _matplotlib()
-    trajectories = _as_list(trajectory)
+    trajectories = _as_list(points)
     curve = _window(curve_or_envelope, trajectories)
     if ax is None:
         figure = figure_cls(figsize=(12.0, 6.2) if trajectories else (7.0, 6.4), layout="constrained")
@@ -127,7 +130,8 @@ def plot_envelope(
     if highlight is not None:
         _draw_highlight(plane, trajectories, highlight, lines)
     if colour_map is not None:
-        figure.colorbar(colour_map, ax=plane, label="time [s]", pad=0.01, fraction=0.04, aspect=30)
+        clock = "time [s]" if trajectories[-1].time is not None else "sample"
+        figure.colorbar(colour_map, ax=plane, label=clock, pad=0.01, fraction=0.04, aspect=30)
     # below the axes: inside it would hide operating points in the lower quadrants
     plane.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), fontsize=7, framealpha=0.9, ncols=1)
     axes: tuple[Any, ...] = (plane,)
@@ -194,17 +198,17 @@ def _draw_region(plane: Any, curve: EnvelopeCurve, lines: dict[str, list[Any]]) 
     plane.grid(True, linewidth=0.3, alpha=0.5)
 
 
-def _draw_points(plane: Any, traj: Trajectory, index: int, lines: dict[str, list[Any]]) -> Any:
-    label = traj.name or f"trajectory {index + 1}"
+def _draw_points(plane: Any, traj: OperatingPoints, index: int, lines: dict[str, list[Any]]) -> Any:
+    label = traj.label or f"points {index + 1}"
     points = plane.scatter(
         traj.velocity,
         traj.effort,
-        c=traj.time,
+        c=traj.clock,
         cmap="viridis",
         s=12,
         marker=_MARKERS[index % len(_MARKERS)],
         linewidths=0.0,
-        label=f"{label} ({traj.engine})" if traj.engine else label,
+        label=label,
         zorder=3,
     )
     lines[f"points:{label}"] = [points]
@@ -212,11 +216,11 @@ def _draw_points(plane: Any, traj: Trajectory, index: int, lines: dict[str, list
 
 
 def _draw_highlight(
-    plane: Any, trajectories: list[Trajectory], highlight: npt.ArrayLike, lines: dict[str, list[Any]]
+    plane: Any, trajectories: list[OperatingPoints], highlight: npt.ArrayLike, lines: dict[str, list[Any]]
 ) -> None:
     mask = np.asarray(highlight, dtype=bool)
     if not trajectories:
-        raise InputError("highlight needs a trajectory to mark")
+        raise InputError("highlight needs points to mark")
     first = trajectories[0]
     if mask.shape != (len(first),):
         raise InputError(f"highlight must be a boolean mask of shape ({len(first)},), got shape {mask.shape}")
@@ -232,25 +236,25 @@ def _draw_highlight(
 
 
 def _draw_time_panel(
-    axis: Any, curve: EnvelopeCurve, trajectories: list[Trajectory], lines: dict[str, list[Any]]
+    axis: Any, curve: EnvelopeCurve, trajectories: list[OperatingPoints], lines: dict[str, list[Any]]
 ) -> tuple[Any, Any]:
     twin = axis.twinx()
     for index, traj in enumerate(trajectories):
-        label = traj.name or f"trajectory {index + 1}"
+        label = traj.label or f"points {index + 1}"
         style = ("-", "--", ":", "-.")[index % 4]
         lines[f"velocity:{label}"] = axis.plot(
-            traj.time, traj.velocity, style, color="#1f77b4", label=f"velocity {label}"
+            traj.clock, traj.velocity, style, color="#1f77b4", label=f"velocity {label}"
         )
         lines[f"effort:{label}"] = twin.plot(
-            traj.time, traj.effort, style, color="#d62728", label=f"effort {label}"
+            traj.clock, traj.effort, style, color="#d62728", label=f"effort {label}"
         )
     first = trajectories[0]
     limit = curve.envelope.effort_limit(first.velocity)
     lines["limit"] = twin.plot(
-        first.time, limit, color="#d62728", linewidth=0.6, alpha=0.5, label="effort limit at v(t)"
+        first.clock, limit, color="#d62728", linewidth=0.6, alpha=0.5, label="effort limit at v(t)"
     )
-    lines["limit"] += twin.plot(first.time, -limit, color="#d62728", linewidth=0.6, alpha=0.5)
-    axis.set_xlabel("time [s]")
+    lines["limit"] += twin.plot(first.clock, -limit, color="#d62728", linewidth=0.6, alpha=0.5)
+    axis.set_xlabel("time [s]" if all(t.time is not None for t in trajectories) else "sample")
     axis.set_ylabel(f"velocity [{curve.velocity_unit}]", color="#1f77b4")
     twin.set_ylabel(f"effort [{curve.effort_unit}]", color="#d62728")
     axis.grid(True, linewidth=0.3, alpha=0.5)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -42,6 +43,4 @@ def envelope_from_argument(spec: str) -> PerformanceEnvelope:
                 f"{spec}: the scenario's drive has no max_effort, so there is no envelope to plot"
             )
         return envelope
-    from drive_envelope._src.datasheet.resolve import resolve_envelope
-
     return resolve_envelope(spec)

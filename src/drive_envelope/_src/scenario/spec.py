@@ -462,22 +462,13 @@ def _resolve_datasheet(
     spec: object, source: str, base_dir: str | os.PathLike[str] | None
 ) -> PerformanceEnvelope:
     """Envelope of ``envelope.datasheet``: a file (relative to the scenario) or a catalog name."""
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+
     if not isinstance(spec, str) or not spec.strip():
         raise InputError(
             f"{source}: key 'envelope.datasheet': expected a file name or catalog name, got {spec!r}"
         )
-    candidate = Path(base_dir) / spec if base_dir is not None else Path(spec)
-    target = str(candidate) if candidate.is_file() else spec
-    try:
-        from drive_envelope._src.datasheet.resolve import resolve_envelope
-    except ImportError:
-        raise InputError(
-            f"{source}: key 'envelope.datasheet': datasheet support is not available in this build"
-        ) from None
-    try:
-        return resolve_envelope(target)
-    except InputError as exc:
-        raise InputError(f"{source}: key 'envelope.datasheet': {exc}") from None
+    return resolve_envelope(spec, base=base_dir, where=f"{source}: key 'envelope.datasheet'")
 
 
 def _read_load(table: Mapping[str, Any], joint: str, source: str) -> LoadSpec:

@@ -158,16 +158,12 @@ def _resolve_envelope(
         raise InputError(
             "add_drive: give exactly one of 'envelope' (an envelope) or 'datasheet' (a file or catalog name)"
         )
-    if isinstance(envelope, PerformanceEnvelope):
-        return envelope
     from drive_envelope._src.datasheet.resolve import resolve_envelope
 
-    spec = envelope if envelope is not None else datasheet
-    if not isinstance(spec, str):
-        raise InputError(
-            f"add_drive: argument 'envelope': expected a PerformanceEnvelope or a file name, got {spec!r}"
-        )
-    return resolve_envelope(spec)
+    if envelope is not None:
+        return resolve_envelope(envelope, where="add_drive: argument 'envelope'")
+    assert datasheet is not None
+    return resolve_envelope(datasheet, where="add_drive: argument 'datasheet'")
 
 
 def _gain_units(joint: str, drive_type: DriveType) -> tuple[str, str]:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -110,13 +111,6 @@ def _map_entry(pattern: str, value: Any, base: Path, where: str) -> MapEntry:
     )
 
 
-def resolve_source(source: str) -> PerformanceEnvelope:
-    """Envelope of an envelope file, datasheet file or catalog name (the datasheet resolver)."""
-    from drive_envelope._src.datasheet.resolve import resolve_envelope
-
-    return resolve_envelope(source)
-
-
 def _joint_paths(stage: Usd.Stage) -> list[str]:
     """Paths of the joints that can carry an envelope (revolute, prismatic, D6)."""
     from pxr import UsdPhysics
@@ -173,10 +167,8 @@ def match_map(
         if not matched:
             raise InputError(f"{map_name}: key 'joints.{entry.pattern}': matches no joint of the stage")
         if entry.source not in cache:
-            try:
-                cache[entry.source] = resolve_source(entry.source)
-            except InputError as exc:
-                raise InputError(f"{map_name}: key 'joints.{entry.pattern}': {exc}") from None
+            where = f"{map_name}: key 'joints.{entry.pattern}'"
+            cache[entry.source] = resolve_envelope(entry.source, where=where)
         for path in matched:
             assignments.setdefault(path, (path, cache[entry.source], entry.instance))
     return list(assignments.values())

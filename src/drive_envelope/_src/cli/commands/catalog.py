@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 6
+from drive_envelope._src.cli.common import add_format_argument
 
 
 def register(subparsers: Any) -> None:
@@ -17,7 +17,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "name", nargs="?", metavar="NAME", help="print this actuator's datasheet file (with sources)"
     )
-    parser.add_argument("--json", action="store_true", help="print the list as JSON")
+    add_format_argument(parser, ("text", "json"), "how to print the list")
     parser.set_defaults(func=_run)
 
 
@@ -47,7 +47,7 @@ def _run(args: argparse.Namespace) -> int:
         items.append(
             {"key": entry.key, "name": entry.name, "joint": entry.joint, "description": entry.description}
         )
-    if args.json:
+    if args.format == "json":
         print(json.dumps(items, indent=2))
     else:
         print(format_table(["key", "joint", "max_effort", "max_velocity", "name"], rows))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 70
+from drive_envelope._src.cli.common import add_format_argument
 
 
 def register(subparsers: Any) -> None:
@@ -50,9 +50,7 @@ def register(subparsers: Any) -> None:
         metavar="F",
         help="|margin| <= F times the cap counts as on the limit (default 0.01)",
     )
-    parser.add_argument(
-        "--json", action="store_true", help="print one JSON object (SI) instead of the text report"
-    )
+    add_format_argument(parser, ("text", "json"), "the report as text or as one JSON object (SI)")
     parser.add_argument(
         "--plot",
         metavar="FIG",
@@ -69,7 +67,9 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.check import CheckOptions
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_check, plot_check
+    from drive_envelope._src.cli.common import checked_output, status
 
+    checked_output(args.plot, "--plot")
     options = CheckOptions(
         tolerance=args.tolerance,
         slack=args.slack,
@@ -79,10 +79,10 @@ def _run(args: argparse.Namespace) -> int:
     report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
     if args.plot:
         written = plot_check(report, args.plot)
-    if args.json:
+    if args.format == "json":
         print(json.dumps(report.to_dict(), indent=2))
     else:
         print(format_check(report))
-        if args.plot:
-            print("wrote " + ", ".join(str(path) for path in written))
+    if args.plot:
+        status("wrote " + ", ".join(str(path) for path in written))
     return 0 if report.passed else 1

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 5
+from drive_envelope._src.cli.common import add_format_argument, add_output_argument
 
 
 def register(subparsers: Any) -> None:
@@ -20,14 +20,14 @@ def register(subparsers: Any) -> None:
         ),
     )
     parser.add_argument("spec", metavar="FILE|NAME", help="datasheet file (TOML/JSON/YAML) or catalog name")
-    parser.add_argument("--json", action="store_true", help="print one JSON object (SI, joint side)")
-    parser.add_argument(
-        "--format",
-        choices=("toml", "json", "usd-snippet"),
-        help="print (or with --output write) the envelope in this format for the other commands",
+    add_format_argument(
+        parser,
+        ("text", "json", "toml", "envelope-json", "usd-snippet"),
+        "what to print: the report, the derivation as JSON (SI), or the envelope as a TOML file, "
+        "a JSON file or a USD snippet",
     )
-    parser.add_argument(
-        "--output", metavar="PATH", help="write the envelope here, atomically (format from suffix)"
+    add_output_argument(
+        parser, "also write the envelope file here, atomically (format from the suffix: .toml, .json, .usda)"
     )
     parser.add_argument(
         "--duty",
@@ -59,16 +59,14 @@ def _run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
+    from drive_envelope._src.cli.common import checked_output, status
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import load_datasheet
     from drive_envelope._src.datasheet.report import derivation_report, envelope_text
     from drive_envelope._src.io.atomic import atomic_write_text
 
-    if args.json and args.format and not args.output:
-        from drive_envelope._src.errors import InputError
-
-        raise InputError("--json and --format both print to stdout: add --output PATH for the envelope file")
+    output = checked_output(args.output)
     overrides = _overrides(args.set)
     if Path(args.spec).is_file():
         sheet = load_datasheet(args.spec, overrides=overrides)
@@ -84,18 +82,17 @@ def _run(args: argparse.Namespace) -> int:
     derivation = derive(
         sheet, duty=args.duty, gradient_method=args.gradient_method, approximate_line=args.approximate_line
     )
-    fmt = args.format or _format_from_suffix(args.output)
-    text = envelope_text(derivation.envelope, fmt)
-    if args.output:
-        atomic_write_text(args.output, text)
-    if args.json:
+    if output is not None:
+        file_format = _format_from_suffix(output)
+        atomic_write_text(output, envelope_text(derivation.envelope, file_format))
+    if args.format == "json":
         print(json.dumps(derivation.to_dict(), indent=2))
-    elif args.format and not args.output:
-        print(text, end="")
-    else:
+    elif args.format == "text":
         print(derivation_report(derivation))
-        if args.output:
-            print(f"\nwrote {args.output} ({fmt})")
+    else:
+        print(envelope_text(derivation.envelope, args.format), end="")
+    if output is not None:
+        status(f"wrote {output} ({file_format})")
     return 0
 
 
@@ -137,8 +134,6 @@ def _toml(text: str, source: str) -> dict[str, Any]:
         raise InputError(f"{source}: malformed TOML: {exc}") from None
 
 
-def _format_from_suffix(output: str | None) -> str:
-    if output is None:
-        return "toml"
+def _format_from_suffix(output: str) -> str:
     suffix = output.lower().rsplit(".", 1)[-1] if "." in output else ""
-    return {"json": "json", "usda": "usd-snippet", "usd": "usd-snippet"}.get(suffix, "toml")
+    return {"json": "envelope-json", "usda": "usd-snippet", "usd": "usd-snippet"}.get(suffix, "toml")

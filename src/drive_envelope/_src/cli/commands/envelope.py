@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 10
+from drive_envelope._src.cli.common import add_format_argument
 
 
 def register(subparsers: Any) -> None:
@@ -14,7 +14,7 @@ def register(subparsers: Any) -> None:
     actions = parser.add_subparsers(dest="envelope_command", metavar="ACTION")
     show = actions.add_parser("show", help="print an envelope file as a table with its corner points")
     show.add_argument("file", metavar="FILE", help="envelope file (TOML or JSON)")
-    show.add_argument("--json", action="store_true", help="print one JSON object (SI) instead of the table")
+    add_format_argument(show, ("text", "json", "toml"), "the table, or the envelope file as JSON or TOML")
     show.set_defaults(func=_show)
     parser.set_defaults(func=lambda args: _usage(parser))
 
@@ -25,11 +25,18 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from drive_envelope._src.io.envelope_file import envelope_table, envelope_to_json, load_envelope
+    from drive_envelope._src.io.envelope_file import (
+        envelope_table,
+        envelope_to_json,
+        envelope_to_toml,
+        load_envelope,
+    )
 
     envelope = load_envelope(args.file)
-    if args.json:
+    if args.format == "json":
         print(envelope_to_json(envelope), end="")
+    elif args.format == "toml":
+        print(envelope_to_toml(envelope), end="")
     else:
         print(envelope_table(envelope))
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 75
+from drive_envelope._src.cli.common import add_format_argument, add_output_argument
 
 
 def register(subparsers: Any) -> None:
@@ -53,10 +53,8 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
     parser.add_argument("--select", metavar="JOINT", default=None, help="joint to fit in a long-format log")
     parser.add_argument("--name", default="", help="name written into the envelope file")
-    parser.add_argument(
-        "--output", "-o", metavar="FILE", default=None, help="write the envelope file (.toml or .json)"
-    )
-    parser.add_argument("--json", action="store_true", help="print one JSON object (SI) instead of the table")
+    add_output_argument(parser, "write the fitted envelope file here (.toml or .json), atomically")
+    add_format_argument(parser, ("text", "json"), "the fit as a table or as one JSON object (SI)")
     add_column_arguments(parser, time=False)
     parser.set_defaults(func=_run)
 
@@ -98,8 +96,10 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.fit import FitOptions
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_fit
+    from drive_envelope._src.cli.common import checked_output, status
     from drive_envelope._src.io.envelope_file import save_envelope
 
+    output = checked_output(args.output)
     options = FitOptions(
         joint=args.joint,
         outlier_quantile=args.outlier_quantile,
@@ -113,12 +113,12 @@ def _run(args: argparse.Namespace) -> int:
         result = fit_curve(args.from_curve, columns=columns, options=options)
     else:
         result = fit_log(args.log, columns=columns, options=options, select=args.select)
-    if args.output:
-        save_envelope(result.envelope, args.output)
-    if args.json:
+    if output is not None:
+        save_envelope(result.envelope, output)
+    if args.format == "json":
         print(json.dumps(result.to_dict(), indent=2))
     else:
         print(format_fit(result))
-        if args.output:
-            print(f"wrote {args.output}")
+    if output is not None:
+        status(f"wrote {output}")
     return 0

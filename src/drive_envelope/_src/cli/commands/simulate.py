@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-ORDER = 40
+from drive_envelope._src.cli.common import add_output_argument
 
 
 def register(subparsers: Any) -> None:
@@ -28,7 +28,7 @@ def register(subparsers: Any) -> None:
         default="reference",
         help="reference (float64 model of the PhysX solver, default), mujoco, physx (real PhysX via ovphysx)",
     )
-    parser.add_argument("--output", "-o", metavar="OUT", help="output file; '-' or absent: CSV on stdout")
+    add_output_argument(parser, "trajectory file, atomically; '-' or absent: stdout", metavar="OUT")
     parser.add_argument(
         "--format", choices=("csv", "json"), help="output format (default: from the suffix, else csv)"
     )
@@ -44,6 +44,7 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from drive_envelope._src.cli.common import checked_output, status
     from drive_envelope._src.scenario.spec import load_scenario
     from drive_envelope._src.scenario.trajectory import (
         save_trajectory,
@@ -58,8 +59,10 @@ def _run(args: argparse.Namespace) -> int:
         text = trajectory_to_json(trajectory) if args.format == "json" else trajectory_to_csv(trajectory)
         sys.stdout.write(text)
         return 0
-    save_trajectory(trajectory, args.output, format=args.format)
-    print(_summary(trajectory, args.output))
+    output = checked_output(args.output)
+    assert output is not None
+    save_trajectory(trajectory, output, format=args.format)
+    status(_summary(trajectory, output))
     return 0
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-ORDER = 60
+from drive_envelope._src.cli.common import add_format_argument, add_output_argument
 
 
 def register(subparsers: Any) -> None:
@@ -36,12 +36,12 @@ def register(subparsers: Any) -> None:
         metavar="INST",
         help="drive instance (angular, linear, rotX..transZ); default from the joint type",
     )
-    apply.add_argument("--output", metavar="OUT.usd", help="write here instead of replacing ROBOT.usd")
+    add_output_argument(apply, "write here instead of replacing ROBOT.usd", metavar="OUT.usd")
     apply.set_defaults(func=_apply)
 
     show = actions.add_parser("show", help="list every joint drive with its envelope in SI")
     show.add_argument("asset", metavar="ROBOT.usd", help="USD file to read")
-    show.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    add_format_argument(show, ("text", "json"), "the drives as a table or as one JSON object (SI)")
     show.set_defaults(func=_show)
     parser.set_defaults(func=lambda args: _usage(parser))
 
@@ -52,10 +52,10 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _apply(args: argparse.Namespace) -> int:
-    import sys
-
-    from drive_envelope._src.adapters.usd.apply import apply_envelopes, match_map, read_map, resolve_source
+    from drive_envelope._src.adapters.usd.apply import apply_envelopes, match_map, read_map
     from drive_envelope._src.adapters.usd.stage import open_stage, save_stage
+    from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
     from drive_envelope._src.errors import InputError
 
     if args.joint is not None and args.datasheet is None and args.envelope is None:
@@ -64,22 +64,25 @@ def _apply(args: argparse.Namespace) -> int:
         raise InputError(
             "usd apply --map: the map file names the envelopes; drop --datasheet/--envelope/--instance"
         )
-    if args.output is not None:
+    if checked_output(args.output) is not None:
         _check_output(args.output)
     stage = open_stage(args.asset)
     if args.map is not None:
         assignments = match_map(stage, read_map(args.map), args.map)
     else:
-        envelope = resolve_source(args.datasheet if args.datasheet is not None else args.envelope)
+        flag, source = (
+            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
+        )
+        envelope = resolve_envelope(source, where=flag)
         assignments = [(args.joint, envelope, args.instance)]
     applied = apply_envelopes(stage, assignments)
     output = args.output if args.output is not None else args.asset
     save_stage(stage, output)
     for item in applied:
         for message in item.warnings:
-            print(f"drive-envelope: warning: {message}", file=sys.stderr)
+            warn(message)
         print(f"{item.joint_path} ({item.instance}): {_summary(item.envelope)}")
-    print(f"wrote {len(applied)} drive(s) to {output}")
+    status(f"wrote {len(applied)} drive(s) to {output}")
     return 0
 
 
@@ -122,7 +125,7 @@ def _show(args: argparse.Namespace) -> int:
     stage = open_stage(args.asset)
     records = list_drives(stage)
     units = stage_units(stage)
-    if args.json:
+    if args.format == "json":
 
         def number(value: float) -> float | str:
             return value if math.isfinite(value) else repr(value)
