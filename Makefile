@@ -26,8 +26,7 @@ setup: $(STAMP) $(PLUGIN)
 # the main job: datasheet -> envelope -> simulated actuator -> plot (files in build/demo/)
 demo: setup
 	mkdir -p build/demo
-	$(BIN)/drive-envelope derive tmotor-ak80-6 --format toml --output build/demo/tmotor-ak80-6.toml
-	$(BIN)/drive-envelope derive tmotor-ak80-6
+	$(BIN)/drive-envelope derive tmotor-ak80-6 -o build/demo/tmotor-ak80-6.toml
 	$(BIN)/drive-envelope envelope show build/demo/tmotor-ak80-6.toml
 	$(BIN)/drive-envelope simulate examples/scenarios/actuator_swing.toml --engine reference --output build/demo/actuator_swing.csv
 	$(BIN)/drive-envelope plot examples/scenarios/actuator_swing.toml --trajectory build/demo/actuator_swing.csv --output build/demo/actuator_swing.png
