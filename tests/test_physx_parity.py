@@ -186,6 +186,7 @@ def test_physx_trajectory_has_reference_layout(runs: dict[str, tuple[object, obj
     assert len(phx) == len(ref)  # type: ignore[arg-type]
     np.testing.assert_array_equal(phx.time, ref.time)  # type: ignore[attr-defined]
     assert phx.engine == "physx" and phx.effort[0] == 0.0  # type: ignore[attr-defined]
+    assert "jointProjectedForce" in phx.metadata["effort_source"]  # type: ignore[attr-defined]
 
 
 def test_velocity_settles_on_max_actuator_velocity(runs: dict[str, tuple[object, object, bool]]) -> None:

@@ -20,7 +20,7 @@ pytestmark = pytest.mark.usd
 
 
 def _stage(meters_per_unit: float = 1.0, kilograms_per_unit: float = 1.0, *, articulation: bool = True):
-    """A stage with a revolute, a prismatic, a D6 and a fixed joint between two bodies."""
+    """A robot whose base carries a revolute, a prismatic, a D6 and a fixed joint, each to its own link."""
     import physx_usd_schemas  # noqa: F401
     from pxr import Sdf, Usd, UsdGeom, UsdPhysics
 
@@ -30,17 +30,18 @@ def _stage(meters_per_unit: float = 1.0, kilograms_per_unit: float = 1.0, *, art
     root = UsdGeom.Xform.Define(stage, "/Robot").GetPrim()
     if articulation:
         UsdPhysics.ArticulationRootAPI.Apply(root)
-    for body in ("base", "link"):
-        UsdPhysics.RigidBodyAPI.Apply(UsdGeom.Xform.Define(stage, f"/Robot/{body}").GetPrim())
+    UsdPhysics.RigidBodyAPI.Apply(UsdGeom.Xform.Define(stage, "/Robot/base").GetPrim())
     for name, schema in (
         ("hinge", UsdPhysics.RevoluteJoint),
         ("slider", UsdPhysics.PrismaticJoint),
         ("d6", UsdPhysics.Joint),
         ("weld", UsdPhysics.FixedJoint),
     ):
+        link = f"/Robot/{name}_link"
+        UsdPhysics.RigidBodyAPI.Apply(UsdGeom.Xform.Define(stage, link).GetPrim())
         joint = schema.Define(stage, f"/Robot/{name}")
         joint.CreateBody0Rel().SetTargets([Sdf.Path("/Robot/base")])
-        joint.CreateBody1Rel().SetTargets([Sdf.Path("/Robot/link")])
+        joint.CreateBody1Rel().SetTargets([Sdf.Path(link)])
     return stage
 
 
@@ -202,16 +203,62 @@ def test_infinite_velocity_is_written_as_inf() -> None:
 
 
 def test_d6_axes_need_an_instance() -> None:
-    """Require rotX..transZ on D6 joints and write the chosen axis."""
-    from drive_envelope.usd import EnvelopeAuthoringWarning, read_envelope, write_envelope
+    """Require rotX|rotY|rotZ on D6 joints and write the chosen axis."""
+    from drive_envelope.usd import read_envelope, write_envelope
 
     stage = _stage()
-    with pytest.raises(InputError, match="D6 joint needs an instance"):
+    with pytest.raises(InputError, match="D6 joint needs an instance, one of rotX, rotY, rotZ"):
         write_envelope(stage, "/Robot/d6", ANGULAR)
     assert write_envelope(stage, "/Robot/d6", ANGULAR, instance="rotY") == "rotY"
     assert read_envelope(stage, "/Robot/d6", instance="rotY").max_actuator_velocity == pytest.approx(math.pi)
-    with pytest.warns(EnvelopeAuthoringWarning, match="only on rotX/rotY/rotZ"):
-        write_envelope(stage, "/Robot/d6", LINEAR, instance="transX")
+
+
+@pytest.mark.parametrize("axis", ["transX", "transY", "transZ"])
+def test_d6_translation_axis_is_refused(axis: str) -> None:
+    """Refuse a D6 translation axis: PhysX never reads an envelope there (it was a warning only)."""
+    from drive_envelope.usd import write_envelope
+
+    stage = _stage()
+    with pytest.raises(
+        InputError, match=rf"\({axis}\): PhysX reads the envelope only on rotX/rotY/rotZ"
+    ) as info:
+        write_envelope(stage, "/Robot/d6", LINEAR, instance=axis)
+    assert "\n" not in str(info.value)
+    assert not stage.GetPrimAtPath("/Robot/d6").GetAppliedSchemas()  # nothing was authored
+
+
+def test_d6_locked_axis_is_refused() -> None:
+    """Refuse an axis the joint locks (PhysicsLimitAPI low > high), as in Newton's D6 test asset."""
+    from pxr import UsdPhysics
+
+    from drive_envelope.usd import write_envelope
+
+    stage = _stage()
+    limit = UsdPhysics.LimitAPI.Apply(stage.GetPrimAtPath("/Robot/d6"), "rotZ")
+    limit.CreateLowAttr(1.0)
+    limit.CreateHighAttr(-1.0)
+    with pytest.raises(InputError, match=r"locks rotZ \(PhysicsLimitAPI:rotZ low 1 > high -1\)"):
+        write_envelope(stage, "/Robot/d6", ANGULAR, instance="rotZ")
+    limit.GetHighAttr().Set(1.0)  # limited, not locked: fine
+    assert write_envelope(stage, "/Robot/d6", ANGULAR, instance="rotZ") == "rotZ"
+
+
+@pytest.mark.parametrize(
+    ("meters", "kilograms", "field"),
+    [(1e-20, 1.0, "max_effort"), (1.0, 1e-40, "max_effort"), (1.0, 1e-35, "velocity_dependent_resistance")],
+)
+def test_value_beyond_float32_after_unit_scaling_is_refused(
+    meters: float, kilograms: float, field: str
+) -> None:
+    """Refuse an effort that overflows float32 in stage units (USD would store maxForce = inf)."""
+    from drive_envelope.usd import write_envelope
+
+    env = PerformanceEnvelope(max_effort=12.0, velocity_dependent_resistance=1e6, max_actuator_velocity=10.0)
+    stage = _stage(meters, kilograms)
+    with pytest.raises(InputError, match=rf"{field} .* beyond the largest float32") as info:
+        write_envelope(stage, "/Robot/hinge", env)
+    assert "metersPerUnit" in str(info.value) and "\n" not in str(info.value)
+    assert not stage.GetPrimAtPath("/Robot/hinge").GetAppliedSchemas()
 
 
 @pytest.mark.parametrize(
@@ -223,6 +270,7 @@ def test_d6_axes_need_an_instance() -> None:
         ("/Robot/weld", ANGULAR, None, "has no drive envelope"),
         ("/Robot/nope", ANGULAR, None, "no such prim"),
         ("/Robot/base", ANGULAR, None, "is not a UsdPhysics joint"),
+        ("/Robot/d6", LINEAR, "transZ", "never on transZ"),
     ],
 )
 def test_bad_targets_raise_one_line(
@@ -248,7 +296,7 @@ def test_warn_outside_articulation() -> None:
     """Warn that PhysX strips the envelope from a joint outside any articulation."""
     from drive_envelope.usd import EnvelopeAuthoringWarning, write_envelope
 
-    with pytest.warns(EnvelopeAuthoringWarning, match="not part of an articulation"):
+    with pytest.warns(EnvelopeAuthoringWarning, match="does not make it an articulation joint"):
         write_envelope(_stage(articulation=False), "/Robot/hinge", ANGULAR)
 
 
@@ -312,3 +360,23 @@ def test_write_on_a_prim_and_relative_path() -> None:
     write_envelope(stage.GetPrimAtPath("/Robot/hinge"), None, ANGULAR)
     write_envelope(stage.GetPrimAtPath("/Robot"), "slider", LINEAR)
     assert read_envelope(stage.GetPrimAtPath("/Robot/slider")).max_effort == 300.0
+
+
+def test_non_numeric_envelope_attribute_is_one_line() -> None:
+    """Report an asset's envelope attribute that holds a string, naming the joint and attribute."""
+    import physx_usd_schemas  # noqa: F401
+    from pxr import Sdf, Usd
+
+    from drive_envelope.usd import list_drives
+
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    layer.ImportFromString(
+        '#usda 1.0\ndef PhysicsRevoluteJoint "hinge" (\n'
+        '    prepend apiSchemas = ["PhysicsDriveAPI:angular",\n'
+        '                          "PhysxDrivePerformanceEnvelopeAPI:angular"]\n)\n{\n'
+        "    float drive:angular:physics:maxForce = 5\n"
+        '    string physxDrivePerformanceEnvelope:angular:maxActuatorVelocity = "fast"\n}\n'
+    )
+    name = "physxDrivePerformanceEnvelope:angular:maxActuatorVelocity"
+    with pytest.raises(InputError, match=rf"joint '/hinge' \(angular\): {name} is 'fast'; expected a number"):
+        list_drives(Usd.Stage.Open(layer))

@@ -12,9 +12,11 @@ colliders go to a process-private temp folder by default).
 Per step the runner writes the applied joint effort (``jointActuationForce``) and the external
 load (a link wrench: a torque about the joint axis, or a force along it), steps, and reads
 ``jointPosition``, ``jointVelocity`` (degrees on revolute joints, converted to radians here) and
-``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF,
-which is the total actuator effort (drive + applied) on PGS and TGS alike (ovphysx 0.3.7's TGS
-also counted the external load in it; 0.7 does not).
+``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF.
+ovphysx 0.7 has no read of the drive's own force; on the test stand (centre of mass on the joint
+axis) the projected force is the total actuator effort (drive + applied) on PGS and TGS alike
+(ovphysx 0.3.7's TGS also counted the external load in it; 0.7 does not). On a link whose centre
+of mass is off the axis it is not: it also carries the reaction of the link's own motion.
 """
 
 from __future__ import annotations

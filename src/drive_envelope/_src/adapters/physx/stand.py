@@ -5,8 +5,10 @@ joint, drive + PhysxDrivePerformanceEnvelopeAPI written by :mod:`drive_envelope.
 scenario's solver type and iteration counts, zero link damping, ``cfmScale`` 0, no gravity) and
 stepped by PhysX in this process (see :mod:`drive_envelope._src.adapters.physx.runner`). The CSV has
 the same columns as the reference engine's: row 0 the initial state, then per step the joint
-position and velocity and PhysX's projected joint force, the total actuator effort (drive +
-applied).
+position and velocity and PhysX's projected joint force (``jointProjectedForce``; ovphysx 0.7
+exposes no drive force of its own). On this stand, whose link has its centre of mass on the joint
+axis, that is the total actuator effort (drive + applied), which the parity tests confirm step by
+step; the trajectory's ``metadata["effort_source"]`` says so.
 
 PhysX computes in float32: expect agreement with ``reference`` to float32 precision. Needs the
 ``physx`` extra (``ovphysx`` >= 0.7, ``usd-core``, ``physx-usd-schemas``).
@@ -26,7 +28,13 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["simulate", "simulate_many"]
+__all__ = ["EFFORT_SOURCE", "simulate", "simulate_many"]
+
+EFFORT_SOURCE = (
+    "PhysX jointProjectedForce: the joint force projected on the DOF; equal to the drive + applied "
+    "effort here because the stand's link has its centre of mass on the joint axis"
+)
+"""What the ``effort`` column of a physx run holds (ovphysx 0.7 has no drive-force read)."""
 
 
 def simulate(scenario: Scenario) -> Trajectory:
@@ -99,6 +107,7 @@ def _trajectory(scenario: Scenario, result: PhysxResult) -> Trajectory:
             "position_iterations": sim.position_iterations,
             "velocity_iterations": sim.velocity_iterations,
             "precision": "float32",
+            "effort_source": EFFORT_SOURCE,
             "engine_version": _ovphysx_version(),
         },
     )

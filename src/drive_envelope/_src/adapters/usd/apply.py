@@ -1,47 +1,45 @@
-"""Apply envelopes to a whole robot asset: open, edit in memory, write atomically.
+"""Apply envelopes to a whole robot asset: one joint, or every joint a map file names.
 
-A map file assigns envelope sources to joints by glob on the joint's prim path::
+A map file (:mod:`~drive_envelope._src.adapters.usd.joint_map`, the same format as ``mujoco apply
+--map``) assigns envelope sources to joints by glob on their prim paths::
 
-    # map.toml: joint glob -> envelope file, datasheet file or catalog name
     [joints]
-    "/Robot/*/hip_*" = "actuators/ak80-6.toml"
-    "/Robot/*/knee" = { envelope = "knee.toml", instance = "angular" }
+    "/anymal/*/*_HAA" = "actuators/anydrive.toml"     # a pattern with '/': the whole prim path
+    "*_KFE" = { datasheet = "knee.toml", instance = "angular" }   # without '/': the prim's name
 
-Relative file names are relative to the map file. Patterns are tried in file order and the first
-that matches a joint wins; a pattern that matches no joint is an error (a typo must not pass
-silently). Globs follow :func:`fnmatch.fnmatchcase` (``*`` also crosses ``/``).
+Joints inside instances are matched by their instance-proxy paths (what ``usd show`` lists) and
+authored on their prototype's source (:mod:`~drive_envelope._src.adapters.usd.instancing`).
 """
 
 from __future__ import annotations
 
-import fnmatch
-import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from drive_envelope._src.datasheet.resolve import resolve_envelope
+from drive_envelope._src.adapters.usd.joint_map import JointMap, match_joints, resolve_envelopes
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["AppliedDrive", "MapEntry", "apply_envelopes", "match_map", "read_map"]
+__all__ = ["AppliedDrive", "Assignment", "apply_envelopes", "joint_paths", "map_assignments"]
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
-class MapEntry:
-    """One line of a map file: joints matching ``pattern`` get the envelope of ``source``."""
+class Assignment:
+    """One envelope to write on one joint."""
 
-    pattern: str
-    """Glob on the joint's prim path."""
-    source: str
-    """Envelope file, datasheet file (resolved against the map's folder) or catalog name."""
+    joint_path: str
+    """Prim path of the joint (an instance proxy's path for a joint inside an instance)."""
+    envelope: PerformanceEnvelope
+    """The envelope (SI, joint side)."""
     instance: str | None = None
     """Drive instance, or None for the joint type's default."""
+    where: str = ""
+    """Prefix for error messages (the map file and key that made this assignment), if any."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -54,71 +52,20 @@ class AppliedDrive:
     """Drive instance written."""
     envelope: PerformanceEnvelope
     """The envelope written (SI)."""
+    authored_at: str = ""
+    """Prim path the opinions went to: the joint, or its prototype's source for an instanced joint."""
     warnings: tuple[str, ...] = ()
     """Authoring warnings for this joint."""
 
 
-def read_map(path: str | os.PathLike[str]) -> list[MapEntry]:
-    """Read a map file (TOML/JSON/YAML) with a ``[joints]`` table of glob -> source.
-
-    Raises:
-        InputError: a missing ``[joints]`` table, an entry that is neither a string nor a table with
-            ``envelope`` / ``datasheet`` (and optional ``instance``), or an unknown key.
-    """
-    from drive_envelope._src.io.files import read_mapping
-
-    data = read_mapping(path)
-    base = Path(path).parent
-    unknown = [key for key in data if key != "joints"]
-    if unknown:
-        raise InputError(
-            f"{path}: unknown key {unknown[0]!r}; expected one [joints] table of glob -> envelope"
-        )
-    joints = data.get("joints")
-    if not isinstance(joints, Mapping) or not joints:
-        raise InputError(
-            f"{path}: missing [joints] table of joint-path glob -> envelope file, datasheet or catalog name"
-        )
-    return [
-        _map_entry(pattern, value, base, f"{path}: key 'joints.{pattern}'")
-        for pattern, value in joints.items()
-    ]
-
-
-def _map_entry(pattern: str, value: Any, base: Path, where: str) -> MapEntry:
-    instance = None
-    if isinstance(value, Mapping):
-        allowed = ("envelope", "datasheet", "instance")
-        for key in value:
-            if key not in allowed:
-                raise InputError(f"{where}: unknown key {key!r}; expected envelope, datasheet or instance")
-        sources = [value[k] for k in ("envelope", "datasheet") if k in value]
-        if len(sources) != 1:
-            raise InputError(
-                f"{where}: expected exactly one of 'envelope' or 'datasheet', got {dict(value)!r}"
-            )
-        instance = value.get("instance")
-        if instance is not None and not isinstance(instance, str):
-            raise InputError(
-                f"{where}: key 'instance': expected a string such as 'angular', got {instance!r}"
-            )
-        value = sources[0]
-    if not isinstance(value, str) or not value.strip():
-        raise InputError(f"{where}: expected an envelope file, datasheet file or catalog name, got {value!r}")
-    candidate = base / value
-    return MapEntry(
-        pattern=pattern, source=str(candidate) if candidate.is_file() else value, instance=instance
-    )
-
-
-def _joint_paths(stage: Usd.Stage) -> list[str]:
-    """Paths of the joints that can carry an envelope (revolute, prismatic, D6)."""
-    from pxr import UsdPhysics
+def joint_paths(stage: Usd.Stage) -> list[str]:
+    """Paths of the joints that can carry an envelope (revolute, prismatic, D6), instanced ones included."""
+    from pxr import Usd, UsdPhysics
 
     from drive_envelope._src.adapters.usd.authoring import joint_kind
 
     paths = []
-    for prim in stage.Traverse():
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         if prim.IsA(UsdPhysics.Joint):
             try:
                 joint_kind(prim)
@@ -128,47 +75,73 @@ def _joint_paths(stage: Usd.Stage) -> list[str]:
     return paths
 
 
-def apply_envelopes(
-    stage: Usd.Stage, assignments: list[tuple[str, PerformanceEnvelope, str | None]]
-) -> list[AppliedDrive]:
-    """Write each ``(joint_path, envelope, instance)`` on the stage, collecting the warnings per joint.
+def map_assignments(stage: Usd.Stage, joint_map: JointMap) -> tuple[list[Assignment], tuple[str, ...]]:
+    """The assignments a map makes on a stage's joints, and the map's warnings.
 
     Raises:
-        InputError: from :func:`~drive_envelope._src.adapters.usd.authoring.write_envelope`; the stage may
-            then be partly edited in memory, so callers write nothing.
+        InputError: a pattern that matches no joint or is never used, or a source that cannot be
+            resolved, naming the map key.
     """
-    from drive_envelope._src.adapters.usd.authoring import write_envelope
+    match = match_joints(joint_map, joint_paths(stage))
+    assignments = [
+        Assignment(
+            joint_path=item.joint,
+            envelope=item.envelope,
+            instance=item.entry.instance,
+            where=item.entry.where,
+        )
+        for item in resolve_envelopes(match)
+        if item.envelope is not None
+    ]
+    return assignments, match.warnings
 
+
+def apply_envelopes(stage: Usd.Stage, assignments: Sequence[Assignment]) -> list[AppliedDrive]:
+    """Write each assignment on the stage's edit target, collecting the warnings per joint.
+
+    Joints of several instances that share one prototype source are authored once; giving them
+    different envelopes is an error (they are one joint in the file).
+
+    Raises:
+        InputError: from :func:`~drive_envelope._src.adapters.usd.authoring.author_envelope`, with the
+            map key in front when the assignment came from a map; the stage may then be partly
+            edited in memory, so callers write nothing.
+    """
+    from drive_envelope._src.adapters.usd.articulation import articulated_joints
+    from drive_envelope._src.adapters.usd.authoring import author_envelope, resolve_joint
+    from drive_envelope._src.adapters.usd.instancing import edit_site
+
+    articulated = articulated_joints(stage)
+    sites: dict[str, Assignment] = {}
     results = []
-    for joint_path, envelope, instance in assignments:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            inst = write_envelope(stage, joint_path, envelope, instance)
-        messages = tuple(str(w.message) for w in caught)
+    for item in assignments:
+        try:
+            prim = resolve_joint(stage, item.joint_path)
+            site = str(edit_site(prim).prim.GetPath())
+            first = sites.setdefault(site, item)
+            if first is not item:
+                _check_shared(first, item, site)
+                continue
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                inst = author_envelope(prim, item.envelope, item.instance, articulated=articulated)
+        except InputError as exc:
+            raise InputError(f"{item.where}: {exc}" if item.where else str(exc)) from None
         results.append(
-            AppliedDrive(joint_path=joint_path, instance=inst, envelope=envelope, warnings=messages)
+            AppliedDrive(
+                joint_path=item.joint_path,
+                instance=inst,
+                envelope=item.envelope,
+                authored_at=site,
+                warnings=tuple(str(w.message) for w in caught),
+            )
         )
     return results
 
 
-def match_map(
-    stage: Usd.Stage, entries: list[MapEntry], map_name: str
-) -> list[tuple[str, PerformanceEnvelope, str | None]]:
-    """Assign each joint the first matching entry's envelope.
-
-    Raises:
-        InputError: an entry matching no joint, or a source that cannot be resolved.
-    """
-    joints = _joint_paths(stage)
-    assignments: dict[str, tuple[str, PerformanceEnvelope, str | None]] = {}
-    cache: dict[str, PerformanceEnvelope] = {}
-    for entry in entries:
-        matched = [path for path in joints if fnmatch.fnmatchcase(path, entry.pattern)]
-        if not matched:
-            raise InputError(f"{map_name}: key 'joints.{entry.pattern}': matches no joint of the stage")
-        if entry.source not in cache:
-            where = f"{map_name}: key 'joints.{entry.pattern}'"
-            cache[entry.source] = resolve_envelope(entry.source, where=where)
-        for path in matched:
-            assignments.setdefault(path, (path, cache[entry.source], entry.instance))
-    return list(assignments.values())
+def _check_shared(first: Assignment, item: Assignment, site: str) -> None:
+    if (first.envelope, first.instance) != (item.envelope, item.instance):
+        raise InputError(
+            f"joints {first.joint_path!r} and {item.joint_path!r} are one joint of a shared prototype "
+            f"({site!r}) and cannot get different envelopes"
+        )

@@ -7,24 +7,32 @@ What PhysX 5.6 reads (``omni.physx`` ``usdLoad/Joint.cpp``):
   ``physxDrivePerformanceEnvelope:<inst>:{maxActuatorVelocity, velocityDependentResistance,
   speedEffortGradient}``; unauthored values fall back to the schema defaults (inf, 0, 0);
 * instances: ``angular`` on revolute joints, ``linear`` on prismatic joints, ``rotX|rotY|rotZ`` on
-  D6 (generic) joints; PhysX does not read the envelope on D6 ``transX|Y|Z`` axes;
+  D6 (generic) joints. PhysX never reads an envelope on a D6 ``transX|Y|Z`` axis (and ignores linear
+  drives on articulation D6 joints altogether, omni.physx ``UsdInterface.cpp``), and a D6 axis whose
+  ``PhysicsLimitAPI`` has ``low > high`` is locked (no DOF, no drive): both are refused;
 * angular instances store degrees (deg/s, N*m*s/deg, (deg/s)/(N*m)); every effort is in stage units
   (``metersPerUnit``, ``kilogramsPerUnit``), see :mod:`drive_envelope._src.adapters.usd.scale`;
-* only joints inside an articulation (a body under ``PhysicsArticulationRootAPI``) keep it.
+* only articulation joints keep it, found as PhysX finds them
+  (:mod:`~drive_envelope._src.adapters.usd.articulation`); a joint inside an instance is authored on
+  its prototype's source (:mod:`~drive_envelope._src.adapters.usd.instancing`).
 
 USD stores these attributes as 32-bit floats: a written value reads back to within float32
-rounding (relative 6e-8), not bit for bit.
+rounding (relative 6e-8), not bit for bit; a value beyond float32's range after the stage-unit
+scaling would be stored as inf (an unlimited maxForce: no envelope at all) and is refused.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from drive_envelope._src.adapters.usd.articulation import articulated_joints
+from drive_envelope._src.adapters.usd.instancing import edit_site
 from drive_envelope._src.adapters.usd.scale import ANGULAR_INSTANCES, LINEAR_INSTANCES, StageUnits, is_angular
-from drive_envelope._src.adapters.usd.stage import stage_units
+from drive_envelope._src.adapters.usd.stage import stage_units, usd_errors
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -35,6 +43,7 @@ __all__ = [
     "ENVELOPE_API",
     "DriveRecord",
     "EnvelopeAuthoringWarning",
+    "author_envelope",
     "joint_kind",
     "list_drives",
     "read_envelope",
@@ -51,6 +60,7 @@ _ATTRIBUTES = {
     "speed_effort_gradient": "speedEffortGradient",
 }
 _D6_INSTANCES = ("rotX", "rotY", "rotZ", "transX", "transY", "transZ")
+_D6_TRANSLATIONS = ("transX", "transY", "transZ")
 _FLT_MAX = 3.4028234663852886e38
 # a drive whose gains saturate maxForce within this error (one degree, one degree per second) was
 # most likely written with per-radian gains into USD's per-degree attributes
@@ -158,7 +168,7 @@ def _choose_instance(prim: Usd.Prim, kind: str, instance: str | None) -> str:
     allowed = {"revolute": ("angular",), "prismatic": ("linear",), "d6": _D6_INSTANCES}[kind]
     if instance is None:
         if kind == "d6":
-            raise InputError(f"{where}: a D6 joint needs an instance, one of {', '.join(_D6_INSTANCES)}")
+            raise InputError(f"{where}: a D6 joint needs an instance, one of rotX, rotY, rotZ")
         return allowed[0]
     if instance not in allowed:
         raise InputError(
@@ -167,29 +177,23 @@ def _choose_instance(prim: Usd.Prim, kind: str, instance: str | None) -> str:
     return instance
 
 
-def in_articulation(prim: Usd.Prim) -> bool:
-    """Whether a joint is an articulation joint (only those keep the envelope in PhysX).
-
-    True when a body of the joint (or the joint) sits under a PhysicsArticulationRootAPI prim and
-    the joint is not excluded from the articulation.
-    """
+def _check_d6_axis(prim: Usd.Prim, inst: str, where: str) -> None:
+    """Refuse the D6 axes PhysX gives no envelope: translations, and axes the joint locks."""
     from pxr import UsdPhysics
 
-    joint = UsdPhysics.Joint(prim)
-    excluded = joint.GetExcludeFromArticulationAttr().Get()
-    if excluded:
-        return False
-    stage = prim.GetStage()
-    candidates = [prim]
-    for rel in (joint.GetBody0Rel(), joint.GetBody1Rel()):
-        candidates += [stage.GetPrimAtPath(target) for target in rel.GetTargets()]
-    for candidate in candidates:
-        node = candidate
-        while node.IsValid() and not node.IsPseudoRoot():
-            if node.HasAPI(UsdPhysics.ArticulationRootAPI):
-                return True
-            node = node.GetParent()
-    return False
+    if inst in _D6_TRANSLATIONS:
+        raise InputError(
+            f"{where}: PhysX reads the envelope only on rotX/rotY/rotZ of a D6 joint, never on {inst} "
+            "(and ignores linear drives on articulation D6 joints); a linear actuator needs a prismatic joint"
+        )
+    if prim.HasAPI(UsdPhysics.LimitAPI, inst):
+        limit = UsdPhysics.LimitAPI(prim, inst)
+        low, high = limit.GetLowAttr().Get(), limit.GetHighAttr().Get()
+        if low is not None and high is not None and float(low) > float(high):
+            raise InputError(
+                f"{where}: the joint locks {inst} (PhysicsLimitAPI:{inst} low {float(low):g} > high "
+                f"{float(high):g}), so PhysX gives it no DOF and no drive; choose a free axis"
+            )
 
 
 # -- writing ------------------------------------------------------------------------------------------
@@ -206,10 +210,11 @@ def write_envelope(
     Applies ``PhysicsDriveAPI:<inst>`` (if absent) and ``PhysxDrivePerformanceEnvelopeAPI:<inst>``,
     sets ``drive:<inst>:physics:maxForce`` to ``max_effort`` and the three envelope attributes,
     converting radians to degrees on angular instances and SI to the stage's units. Edits go to the
-    stage's current edit target. Suspicious situations are reported with
-    :class:`EnvelopeAuthoringWarning`: a joint outside any articulation (PhysX strips its envelope),
-    an existing maxForce that differs from ``max_effort``, stiffness or damping that look like
-    per-radian values on an angular drive, and an envelope on a D6 translational axis.
+    stage's current edit target; for a joint inside an instance, to its prototype's source. What
+    PhysX would accept but probably not do as meant is reported with
+    :class:`EnvelopeAuthoringWarning`: a joint that is not an articulation joint (PhysX strips its
+    envelope), an existing maxForce that differs from ``max_effort``, stiffness or damping that look
+    like per-radian values on an angular drive, and an edit redirected to a prototype's source.
 
     Args:
         prim_or_stage: A ``Usd.Stage``, or a ``Usd.Prim`` (the joint itself when ``joint_path`` is
@@ -217,66 +222,107 @@ def write_envelope(
         joint_path: Prim path of the joint, or None.
         envelope: The envelope (joint side, SI); its ``joint`` type must match the instance.
         instance: Drive instance; default from the joint type (revolute -> ``angular``,
-            prismatic -> ``linear``); D6 joints need one of ``rotX|rotY|rotZ|transX|transY|transZ``.
+            prismatic -> ``linear``); D6 joints need one of ``rotX|rotY|rotZ``.
 
     Returns:
         The drive instance written.
 
     Raises:
         InputError: no such joint, a joint type without envelope, an instance that does not fit the
-            joint, or an envelope for the other joint type.
+            joint, a D6 translation or locked axis, an envelope for the other joint type, a value
+            beyond float32 in the stage's units, or a joint inside an instance of another file.
     """
-    from pxr import Sdf, UsdPhysics
-
     prim = resolve_joint(prim_or_stage, joint_path)
+    return author_envelope(prim, envelope, instance, articulated=articulated_joints(prim.GetStage()))
+
+
+def author_envelope(
+    prim: Usd.Prim, envelope: PerformanceEnvelope, instance: str | None, *, articulated: Collection[str]
+) -> str:
+    """:func:`write_envelope` on a resolved joint prim, given the stage's articulation joints.
+
+    ``articulated`` is :func:`~drive_envelope._src.adapters.usd.articulation.articulated_joints` of
+    the stage, computed once for a whole robot instead of once per joint.
+    """
     kind = joint_kind(prim)
     inst = _choose_instance(prim, kind, instance)
     where = f"joint {str(prim.GetPath())!r} ({inst})"
+    if kind == "d6":
+        _check_d6_axis(prim, inst, where)
     expected = "revolute" if is_angular(inst) else "prismatic"
     if envelope.joint != expected:
         raise InputError(
             f"{where}: the envelope is for a {envelope.joint} joint, this drive needs a {expected} one"
         )
     units = stage_units(prim.GetStage())
-    _warn_before_write(prim, inst, kind, envelope, units, where)
-    drive = UsdPhysics.DriveAPI.Apply(prim, inst)
-    drive.CreateMaxForceAttr().Set(_to_float32(envelope.max_effort * units.effort(inst)))
-    if not prim.ApplyAPI(ENVELOPE_API, inst):
+    values = _usd_values(envelope, inst, units, where)
+    site = edit_site(prim)
+    if site.note:
+        _warn(site.note)
+    # an instanced joint's note already says why PhysX does not simulate it while instanced
+    simulated = str(prim.GetPath()) in articulated or prim.IsInstanceProxy()
+    _warn_before_write(prim, inst, envelope, units, where, simulated)
+    with usd_errors(f"{where}: USD refused the edit"):
+        _author(site.prim, inst, values, where)
+    return inst
+
+
+def _author(target: Usd.Prim, inst: str, values: dict[str, float], where: str) -> None:
+    """Apply the two API schemas on ``target`` and set maxForce and the three envelope attributes."""
+    from pxr import Sdf, UsdPhysics
+
+    if not target.HasAPI(UsdPhysics.DriveAPI, inst):
+        UsdPhysics.DriveAPI.Apply(target, inst)
+    UsdPhysics.DriveAPI(target, inst).CreateMaxForceAttr().Set(values.pop("max_effort"))
+    if not target.HasAPI(ENVELOPE_API, inst) and not target.ApplyAPI(ENVELOPE_API, inst):
         raise InputError(f"{where}: USD refused {ENVELOPE_API}:{inst} (are the physx-usd-schemas installed?)")
+    for field, attr_name in _ATTRIBUTES.items():
+        name = f"physxDrivePerformanceEnvelope:{inst}:{attr_name}"
+        target.CreateAttribute(name, Sdf.ValueTypeNames.Float, False).Set(values[field])
+
+
+def _usd_values(envelope: PerformanceEnvelope, inst: str, units: StageUnits, where: str) -> dict[str, float]:
+    """The four values as the stage stores them; a finite value beyond float32 is refused.
+
+    USD keeps them as 32-bit floats: beyond 3.4e38 a value becomes inf, which for maxForce means an
+    unlimited drive (and so no envelope at all) and for a slope a wrong number.
+    """
     factors = {
+        "max_effort": units.effort(inst),
         "max_actuator_velocity": units.velocity(inst),
         "velocity_dependent_resistance": units.per_speed(inst),
         "speed_effort_gradient": units.speed_per_effort(inst),
     }
-    for field, attr_name in _ATTRIBUTES.items():
-        value = getattr(envelope, field) * factors[field]
-        name = f"physxDrivePerformanceEnvelope:{inst}:{attr_name}"
-        prim.CreateAttribute(name, Sdf.ValueTypeNames.Float, False).Set(_to_float32(value))
-    return inst
-
-
-def _to_float32(value: float) -> float:
-    """The value USD will store (a float attribute): beyond float32 range it becomes inf."""
-    return math.inf if value > _FLT_MAX else float(value)
+    values = {}
+    for field, factor in factors.items():
+        si = getattr(envelope, field)
+        value = si * factor
+        if math.isfinite(si) and not value <= _FLT_MAX:
+            raise InputError(
+                f"{where}: {field} {si:.6g} (SI) is {value:.6g} in this stage's units (metersPerUnit "
+                f"{units.meters_per_unit:g}, kilogramsPerUnit {units.kilograms_per_unit:g}), beyond the "
+                "largest float32 USD can store (3.4e38): it would be written as inf"
+            )
+        values[field] = value
+    return values
 
 
 def _warn(message: str) -> None:
-    warnings.warn(message, EnvelopeAuthoringWarning, stacklevel=3)
+    warnings.warn(message, EnvelopeAuthoringWarning, stacklevel=4)
 
 
 def _warn_before_write(
-    prim: Usd.Prim, inst: str, kind: str, envelope: PerformanceEnvelope, units: StageUnits, where: str
+    prim: Usd.Prim, inst: str, envelope: PerformanceEnvelope, units: StageUnits, where: str, articulated: bool
 ) -> None:
     """Emit the authoring warnings that compare the new envelope with what the joint already has."""
     from pxr import UsdPhysics
 
-    if not in_articulation(prim):
+    if not articulated:
         _warn(
-            f"{where}: not part of an articulation (no PhysicsArticulationRootAPI above its bodies); "
-            "PhysX ignores the envelope here"
+            f"{where}: PhysX does not make it an articulation joint (no PhysicsArticulationRootAPI reaches "
+            "it, or it anchors the articulation to the world, joins a link to the world, closes a loop or "
+            "is excluded); PhysX ignores the envelope here"
         )
-    if inst in ("transX", "transY", "transZ"):
-        _warn(f"{where}: PhysX 5.6 reads the envelope only on rotX/rotY/rotZ of a D6 joint, not on {inst}")
     if not prim.HasAPI(UsdPhysics.DriveAPI, inst):
         return
     drive = UsdPhysics.DriveAPI(prim, inst)
@@ -342,22 +388,31 @@ def read_envelope(
     return envelope
 
 
+def _number(attr: Any, default: float, where: str) -> float:
+    """An attribute's value as a float (``default`` when it has none); anything else is refused."""
+    raw = attr.Get() if attr else None
+    if raw is None:
+        return default
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        raise InputError(f"{where}: {attr.GetName()} is {raw!r}; expected a number")
+    return float(raw)
+
+
 def _drive_values(prim: Usd.Prim, inst: str, units: StageUnits) -> tuple[float, float, float]:
     """``(max_effort, stiffness, damping)`` of a drive in SI (inf for an unlimited maxForce)."""
     from pxr import UsdPhysics
 
+    where = f"joint {str(prim.GetPath())!r} ({inst})"
     drive = UsdPhysics.DriveAPI(prim, inst)
-    max_force = float(drive.GetMaxForceAttr().Get())
+    max_force = _number(drive.GetMaxForceAttr(), math.inf, where)
     max_effort = math.inf if max_force >= _FLT_MAX else max_force / units.effort(inst)
+    stiffness = _number(drive.GetStiffnessAttr(), 0.0, where)
+    damping = _number(drive.GetDampingAttr(), 0.0, where)
     if drive.GetTypeAttr().Get() == "acceleration":
         # acceleration gains are per time only; angular ones are still per degree
         angle = units.position(inst) if is_angular(inst) else 1.0
-        stiffness = float(drive.GetStiffnessAttr().Get()) * angle
-        damping = float(drive.GetDampingAttr().Get()) * angle
-    else:
-        stiffness = float(drive.GetStiffnessAttr().Get()) / units.per_position(inst)
-        damping = float(drive.GetDampingAttr().Get()) / units.per_speed(inst)
-    return max_effort, stiffness, damping
+        return max_effort, stiffness * angle, damping * angle
+    return max_effort, stiffness / units.per_position(inst), damping / units.per_speed(inst)
 
 
 def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnvelope | None:
@@ -370,10 +425,11 @@ def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnv
         "velocity_dependent_resistance": units.per_speed(inst),
         "speed_effort_gradient": units.speed_per_effort(inst),
     }
+    where = f"joint {str(prim.GetPath())!r} ({inst})"
     values = {}
     for field, attr_name in _ATTRIBUTES.items():
-        raw = prim.GetAttribute(f"physxDrivePerformanceEnvelope:{inst}:{attr_name}").Get()
-        value = float(raw) if raw is not None else (math.inf if field == "max_actuator_velocity" else 0.0)
+        attr = prim.GetAttribute(f"physxDrivePerformanceEnvelope:{inst}:{attr_name}")
+        value = _number(attr, math.inf if field == "max_actuator_velocity" else 0.0, where)
         if field == "max_actuator_velocity" and value >= _FLT_MAX:
             value = math.inf
         values[field] = value / factors[field]
@@ -381,7 +437,7 @@ def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnv
     try:
         return PerformanceEnvelope(max_effort=max_effort, joint=joint, name=str(prim.GetPath()), **values)
     except InputError as exc:
-        raise InputError(f"joint {str(prim.GetPath())!r} ({inst}): {exc}") from None
+        raise InputError(f"{where}: {exc}") from None
 
 
 def _drive_instances(prim: Usd.Prim) -> list[str]:
@@ -400,6 +456,7 @@ def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
     from pxr import Usd, UsdPhysics
 
     units = stage_units(stage)
+    articulated = articulated_joints(stage)
     records = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         if not prim.IsA(UsdPhysics.Joint):
@@ -408,7 +465,6 @@ def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
             kind = joint_kind(prim)
         except InputError:
             continue
-        articulated = in_articulation(prim)
         for inst in _drive_instances(prim):
             max_effort, stiffness, damping = _drive_values(prim, inst, units)
             envelope = _envelope_of(prim, inst, units) if prim.HasAPI(ENVELOPE_API, inst) else None
@@ -417,7 +473,7 @@ def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
                     joint_path=str(prim.GetPath()),
                     joint_kind=kind,
                     instance=inst,
-                    in_articulation=articulated,
+                    in_articulation=str(prim.GetPath()) in articulated,
                     max_effort=max_effort,
                     stiffness=stiffness,
                     damping=damping,

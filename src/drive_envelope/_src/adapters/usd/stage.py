@@ -1,15 +1,25 @@
-"""Opening, saving and describing USD stages, with the PhysX schemas registered.
+"""Opening USD stages with the PhysX schemas registered, and USD's messages as one clean line.
 
-The one place that turns a file into a ``Usd.Stage`` and back: every command and function of the
-USD adapter goes through :func:`open_stage` and :func:`save_stage`.
+With :mod:`~drive_envelope._src.adapters.usd.save` the one place that turns files into a
+``Usd.Stage`` and back: every command and function of the USD adapter opens through
+:func:`open_stage` (the asset itself) or :func:`open_overlay` (a new in-memory layer over it, the
+non-destructive way: edits go to the new layer only).
+
+USD reports problems through its own diagnostics (``Tf``), printed straight to stderr with C++
+names (``pxrInternal_v0_26_11__pxrReserved__::...``). Here they are collected while a stage opens
+and turned into one-line messages: a file USD cannot read is an :class:`InputError`, a sublayer or
+reference it cannot load is a :class:`UsdStageWarning`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
-import shutil
+import re
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.adapters.usd.scale import StageUnits
 from drive_envelope._src.errors import InputError
@@ -17,7 +27,27 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["open_stage", "register_schemas", "save_stage", "stage_units"]
+__all__ = [
+    "UsdStageWarning",
+    "clean_usd_message",
+    "open_overlay",
+    "open_stage",
+    "register_schemas",
+    "stage_units",
+    "usd_diagnostics",
+]
+
+_READABLE = (".usd", ".usda", ".usdc", ".usdz")
+# stage metadata a layer over an asset must repeat: USD reads stage metadata from the root layer only
+# (a sublayer's metersPerUnit is ignored), so without these a metre asset would compose as centimetres
+_NOT_COPIED = {"subLayers", "subLayerOffsets", "documentation", "comment", "customLayerData"}
+_INTERNAL = re.compile(r"\bpxrInternal_v\w+?__pxrReserved__::")
+_STAGE_SUFFIX = re.compile(r"\s*\(instantiating stage on stage @[^@]*@ <0x[0-9a-f]+>\)")
+_MAX_MESSAGE = 300
+
+
+class UsdStageWarning(UserWarning):
+    """A problem USD found while composing an asset (a sublayer or reference it cannot load)."""
 
 
 def register_schemas() -> None:
@@ -35,49 +65,154 @@ def register_schemas() -> None:
         ) from None
 
 
-def open_stage(path: str | os.PathLike[str]) -> Usd.Stage:
-    """Open a USD file with the PhysX schemas registered.
+def clean_usd_message(text: str) -> str:
+    """One line of a USD diagnostic: no C++ namespaces, no stage addresses, no line breaks."""
+    text = _STAGE_SUFFIX.sub("", _INTERNAL.sub("", str(text)))
+    text = " ".join(text.split())
+    return text if len(text) <= _MAX_MESSAGE else text[: _MAX_MESSAGE - 3] + "..."
 
-    Raises:
-        InputError: missing file, or a file USD cannot read.
+
+def _error_text(exc: BaseException) -> str:
+    """The commentary of every ``Tf.Error`` a ``Tf.ErrorException`` carries, cleaned."""
+    parts = [str(getattr(error, "commentary", error)).strip() for error in exc.args] or [str(exc)]
+    return clean_usd_message("; ".join(dict.fromkeys(parts)))  # USD often repeats itself
+
+
+@contextlib.contextmanager
+def usd_diagnostics() -> Iterator[list[str]]:
+    """Collect USD's warnings and status messages instead of letting USD print them.
+
+    Yields a list that holds, after the block, each diagnostic as one clean line.
     """
-    file = Path(path)
-    if not file.is_file():
-        raise InputError(f"{file}: no such file")
-    register_schemas()
-    from pxr import Sdf, Tf, Usd
+    from pxr import UsdUtils
+
+    messages: list[str] = []
+    delegate = UsdUtils.CoalescingDiagnosticDelegate()  # while it lives USD prints nothing
+    try:
+        yield messages
+    finally:
+        messages.extend(clean_usd_message(d.commentary) for d in delegate.TakeUncoalescedDiagnostics())
+        del delegate
+
+
+@contextlib.contextmanager
+def usd_errors(where: str) -> Iterator[None]:
+    """Turn a ``Tf.ErrorException`` raised in the block into an :class:`InputError` naming ``where``."""
+    from pxr import Tf
 
     try:
-        cached = Sdf.Layer.Find(str(file))
-        if cached is not None:
-            cached.Reload(force=True)  # the file on disk, not edits an earlier failed run left in memory
-        stage = Usd.Stage.Open(str(file))
+        yield
     except Tf.ErrorException as exc:
-        raise InputError(f"{file}: USD cannot open it: {' '.join(str(exc).split())[:300]}") from None
+        raise InputError(f"{where}: {_error_text(exc)}") from None
+
+
+def _check_readable(file: Path) -> None:
+    if not file.exists():
+        raise InputError(f"{file}: no such file")
+    if file.is_dir():
+        raise InputError(f"{file}: is a folder; expected a USD file (.usd, .usda, .usdc or .usdz)")
+    if file.suffix.lower() not in _READABLE:
+        raise InputError(f"{file}: expected a USD file (.usd, .usda, .usdc or .usdz), got {file.suffix!r}")
+
+
+def _reuse_open_layer(file: Path) -> None:
+    """Leave a layer this process already has open as it is, or refresh it if it is unedited.
+
+    A dirty layer holds edits that another stage of this process (a Kit or Isaac Sim session)
+    has not saved: reloading it would throw them away, so it is used as it is, with a warning.
+    """
+    from pxr import Sdf
+
+    layer = Sdf.Layer.Find(str(file))
+    if layer is None:
+        return
+    if layer.dirty:
+        warnings.warn(
+            f"{file}: already open in this process with unsaved edits; using the open layer, not the file",
+            UsdStageWarning,
+            stacklevel=3,
+        )
+        return
+    with usd_errors(str(file)):
+        layer.Reload()  # only when the file changed on disk; the layer has nothing unsaved
+
+
+def _warn_composition(file: Path, messages: list[str], stage: Any) -> None:
+    problems = [clean_usd_message(str(error)) for error in _composition_errors(stage)] or messages
+    for message in problems[:5]:
+        warnings.warn(f"{file}: {message}", UsdStageWarning, stacklevel=3)
+    if len(problems) > 5:
+        warnings.warn(f"{file}: {len(problems) - 5} more composition problems", UsdStageWarning, stacklevel=3)
+
+
+def _composition_errors(stage: Any) -> list[Any]:
+    errors = getattr(stage, "GetCompositionErrors", None)  # usd-core >= 24.11
+    return list(errors()) if errors is not None else []
+
+
+def open_stage(path: str | os.PathLike[str]) -> Usd.Stage:
+    """Open a USD file (payloads loaded) with the PhysX schemas registered.
+
+    A layer of that file that this process already has open is shared (as USD always does); if it
+    has unsaved edits they are kept and a :class:`UsdStageWarning` says so; an unedited one is
+    refreshed from the file. Sublayers or references USD cannot load are reported as
+    :class:`UsdStageWarning` (USD itself skips them).
+
+    Raises:
+        InputError: a missing file, a folder, a suffix USD does not read, or a file USD cannot parse.
+    """
+    file = Path(path)
+    _check_readable(file)
+    register_schemas()
+    from pxr import Usd
+
+    _reuse_open_layer(file)
+    with usd_diagnostics() as messages, usd_errors(f"{file}: USD cannot open it"):
+        stage = Usd.Stage.Open(str(file), load=Usd.Stage.LoadAll)
     if stage is None:
         raise InputError(f"{file}: USD cannot open it")
+    _warn_composition(file, messages, stage)
     return stage
 
 
-def save_stage(stage: Usd.Stage, output: str | os.PathLike[str]) -> None:
-    """Write the stage's root layer to ``output`` atomically (a temporary file renamed over it)."""
-    from drive_envelope._src.io.atomic import atomic_path
+def open_overlay(path: str | os.PathLike[str]) -> Usd.Stage:
+    """A stage whose root is a new in-memory layer over the asset at ``path``: edits go there only.
 
-    target = Path(output)
-    if target.suffix.lower() not in (".usd", ".usda", ".usdc"):
-        raise InputError(f"--output {str(output)!r}: expected a .usd, .usda or .usdc file name")
-    with atomic_path(target) as tmp:
-        if not stage.GetRootLayer().Export(str(tmp)):
-            raise InputError(f"{target}: USD could not write the file")
-        if target.exists():
-            shutil.copymode(target, tmp)  # the temporary file is 0600; keep the asset's permissions
+    The new layer sublayers the asset (by absolute path until it is saved:
+    :func:`~drive_envelope._src.adapters.usd.save.save_stage` writes it relative to the output's
+    folder) and repeats the asset's stage metadata (``metersPerUnit``, ``kilogramsPerUnit``,
+    ``upAxis``, ``defaultPrim``, time codes), which USD reads from the root layer only. The asset's
+    own layers are never edited.
+
+    Raises:
+        InputError: as :func:`open_stage`.
+    """
+    source = open_stage(path)  # validates, reports composition problems once, loads the asset's layers
+    from pxr import Sdf, Usd
+
+    base = source.GetRootLayer()
+    overlay = Sdf.Layer.CreateAnonymous(".usda")
+    for key in base.pseudoRoot.ListInfoKeys():
+        if key not in _NOT_COPIED:
+            overlay.pseudoRoot.SetInfo(key, base.pseudoRoot.GetInfo(key))
+    overlay.documentation = f"drive-envelope: PhysX drive envelopes over {Path(path).name}"
+    overlay.subLayerPaths.append(base.realPath or base.identifier)
+    with usd_diagnostics(), usd_errors(f"{path}: USD cannot open it"):
+        stage = Usd.Stage.Open(overlay, load=Usd.Stage.LoadAll)
+    stage.SetEditTarget(Usd.EditTarget(overlay))
+    return stage
 
 
 def stage_units(stage: Usd.Stage) -> StageUnits:
-    """The stage's ``metersPerUnit`` and ``kilogramsPerUnit`` (USD fallbacks 0.01 and 1)."""
+    """The stage's ``metersPerUnit`` and ``kilogramsPerUnit`` (USD fallbacks 0.01 and 1).
+
+    Raises:
+        InputError: a unit that is not a finite number > 0.
+    """
     from pxr import UsdGeom, UsdPhysics
 
-    return StageUnits(
-        meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
-        kilograms_per_unit=float(UsdPhysics.GetStageKilogramsPerUnit(stage)),
-    )
+    meters, kilograms = UsdGeom.GetStageMetersPerUnit(stage), UsdPhysics.GetStageKilogramsPerUnit(stage)
+    try:
+        return StageUnits(meters_per_unit=float(meters), kilograms_per_unit=float(kilograms))
+    except ValueError as exc:
+        raise InputError(f"{stage.GetRootLayer().identifier}: stage metadata: {exc}") from None

@@ -19,14 +19,19 @@ def register(subparsers: Any) -> None:
         "apply",
         help="write envelopes on joint drives (one joint, or the whole robot from a map file)",
         description="Apply PhysicsDriveAPI + PhysxDrivePerformanceEnvelopeAPI with PhysX's unit conventions "
-        "(degrees on angular drives, stage metersPerUnit/kilogramsPerUnit). The input is left untouched "
-        "on any error; without --output it is replaced atomically.",
+        "(degrees on angular drives, stage metersPerUnit/kilogramsPerUnit). -o OUT.usda writes a small new "
+        "layer that sublayers ROBOT.usd and holds only the envelopes (the asset stays as it is); add "
+        "--flatten for one self-contained file, or edit ROBOT.usd itself with --in-place. The result is "
+        "reopened and checked before it replaces any file; on any error nothing is written.",
     )
-    apply.add_argument("asset", metavar="ROBOT.usd", help="USD file to edit")
+    apply.add_argument("asset", metavar="ROBOT.usd", help="USD file of the robot (or scene)")
     target = apply.add_mutually_exclusive_group(required=True)
     target.add_argument("--joint", metavar="PATH", help="prim path of one joint")
     target.add_argument(
-        "--map", metavar="MAP", help="TOML/JSON map of joint-path glob -> envelope or datasheet"
+        "--map",
+        metavar="MAP",
+        help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet, or a shipped map's name "
+        "(unitree-go2, franka-fr3, ...)",
     )
     source = apply.add_mutually_exclusive_group()
     source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")
@@ -34,9 +39,22 @@ def register(subparsers: Any) -> None:
     apply.add_argument(
         "--instance",
         metavar="INST",
-        help="drive instance (angular, linear, rotX..transZ); default from the joint type",
+        help="drive instance (angular, linear, rotX, rotY, rotZ); default from the joint type",
     )
-    add_output_argument(apply, "write here instead of replacing ROBOT.usd", metavar="OUT.usd")
+    add_output_argument(
+        apply, "write a new layer over ROBOT.usd here (.usda, .usd or .usdc)", metavar="OUT.usda"
+    )
+    apply.add_argument(
+        "--flatten",
+        action="store_true",
+        help="with -o: write the whole composed stage as one self-contained file",
+    )
+    apply.add_argument(
+        "--in-place", action="store_true", help="edit ROBOT.usd itself (its root layer) instead of writing -o"
+    )
+    apply.add_argument(
+        "--force", action="store_true", help="replace a read-only output (or asset, with --in-place)"
+    )
     apply.set_defaults(func=_apply)
 
     show = actions.add_parser("show", help="list every joint drive with its envelope in SI")
@@ -52,10 +70,60 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _apply(args: argparse.Namespace) -> int:
-    from drive_envelope._src.adapters.usd.apply import apply_envelopes, match_map, read_map
-    from drive_envelope._src.adapters.usd.stage import open_stage, save_stage
-    from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.cli.common import status
+
+    _check_apply_arguments(args)
+    with _printed_warnings():
+        applied, written, drives = _apply_and_save(args)
+        for item in applied:
+            where = "" if item.authored_at == item.joint_path else f" [authored on {item.authored_at}]"
+            print(f"{item.joint_path} ({item.instance}){where}: {_summary(item.envelope)}")
+    kind = "in place" if args.in_place else "self-contained" if args.flatten else f"a layer over {args.asset}"
+    enveloped = sum(1 for record in drives if record.envelope is not None)
+    status(
+        f"wrote {len(applied)} drive(s) to {written} ({kind}; reopened: {enveloped} of "
+        f"{len(drives)} joint drives have an envelope)"
+    )
+    return 0
+
+
+def _apply_and_save(args: argparse.Namespace) -> tuple[list[Any], str, list[Any]]:
+    """Edit in memory, write (checked before anything is replaced) and list the written drives."""
+    from drive_envelope._src.adapters.usd.apply import Assignment, apply_envelopes, map_assignments
+    from drive_envelope._src.adapters.usd.authoring import list_drives
+    from drive_envelope._src.adapters.usd.joint_map import read_map
+    from drive_envelope._src.adapters.usd.save import save_stage
+    from drive_envelope._src.adapters.usd.stage import open_overlay, open_stage
+    from drive_envelope._src.cli.common import warn
     from drive_envelope._src.datasheet.resolve import resolve_envelope
+
+    joint_map = read_map(args.map) if args.map is not None else None  # map mistakes before any USD work
+    stage = open_stage(args.asset) if args.in_place else open_overlay(args.asset)
+    if joint_map is not None:
+        assignments, map_warnings = map_assignments(stage, joint_map)
+        for message in map_warnings:
+            warn(message)
+    else:
+        flag, name = (
+            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
+        )
+        envelope = resolve_envelope(name, where=flag)
+        assignments = [Assignment(joint_path=args.joint, envelope=envelope, instance=args.instance)]
+    applied = apply_envelopes(stage, assignments)
+    for item in applied:
+        for message in item.warnings:
+            warn(message)
+    output = None if args.in_place else args.output
+    save_stage(stage, output, flatten=args.flatten, force=args.force)
+    return applied, args.asset if args.in_place else args.output, list_drives(stage)
+
+
+def _check_apply_arguments(args: argparse.Namespace) -> None:
+    """Refuse inconsistent flags and outputs USD cannot write before any work is done."""
+    from pathlib import Path
+
+    from drive_envelope._src.adapters.usd.save import check_output_name
+    from drive_envelope._src.cli.common import checked_output
     from drive_envelope._src.errors import InputError
 
     if args.joint is not None and args.datasheet is None and args.envelope is None:
@@ -64,38 +132,50 @@ def _apply(args: argparse.Namespace) -> int:
         raise InputError(
             "usd apply --map: the map file names the envelopes; drop --datasheet/--envelope/--instance"
         )
-    if checked_output(args.output) is not None:
-        _check_output(args.output)
-    stage = open_stage(args.asset)
-    if args.map is not None:
-        assignments = match_map(stage, read_map(args.map), args.map)
-    else:
-        flag, source = (
-            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
+    if args.in_place and (args.output is not None or args.flatten):
+        raise InputError("usd apply --in-place: edits ROBOT.usd itself; drop -o/--output and --flatten")
+    if args.in_place:
+        if Path(args.asset).suffix.lower() == ".usdz":
+            raise InputError(
+                f"{args.asset}: a .usdz package cannot be edited in place (USD only reads it); write a "
+                f"layer over it instead: -o {Path(args.asset).stem}_envelope.usda"
+            )
+        return
+    if args.output is None:
+        raise InputError(
+            f"usd apply: say where the result goes: -o {Path(args.asset).stem}_envelope.usda writes a new "
+            "layer over the asset (which stays as it is), --flatten -o OUT.usd one self-contained file, "
+            "--in-place edits the asset itself"
         )
-        envelope = resolve_envelope(source, where=flag)
-        assignments = [(args.joint, envelope, args.instance)]
-    applied = apply_envelopes(stage, assignments)
-    output = args.output if args.output is not None else args.asset
-    save_stage(stage, output)
-    for item in applied:
-        for message in item.warnings:
-            warn(message)
-        print(f"{item.joint_path} ({item.instance}): {_summary(item.envelope)}")
-    status(f"wrote {len(applied)} drive(s) to {output}")
-    return 0
+    check_output_name(checked_output(args.output) or "", "--output")
+    if _same_file(args.output, args.asset):
+        raise InputError(f"--output {args.output!r} is the asset itself: use --in-place to edit it")
 
 
-def _check_output(output: str) -> None:
-    """Refuse an output name USD cannot write before any work is done."""
-    from pathlib import Path
+def _same_file(a: str, b: str) -> bool:
+    import os
 
-    from drive_envelope._src.errors import InputError
+    return os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b)
 
-    if Path(output).suffix.lower() not in (".usd", ".usda", ".usdc"):
-        raise InputError(f"--output {output!r}: expected a .usd, .usda or .usdc file name")
-    if not Path(output).parent.exists() and str(Path(output).parent):
-        raise InputError(f"--output {output!r}: folder {str(Path(output).parent)!r} does not exist")
+
+def _printed_warnings() -> Any:
+    """Print every Python warning raised in the block as one ``drive-envelope: warning:`` line."""
+    import contextlib
+    import warnings
+
+    from drive_envelope._src.cli.common import warn
+
+    @contextlib.contextmanager
+    def printed() -> Any:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                yield
+            finally:
+                for message in dict.fromkeys(str(w.message) for w in caught):
+                    warn(message)
+
+    return printed()
 
 
 def _summary(envelope: Any) -> str:
@@ -122,8 +202,9 @@ def _show(args: argparse.Namespace) -> int:
     from drive_envelope._src.adapters.usd.stage import open_stage, stage_units
     from drive_envelope._src.format import format_table, format_value
 
-    stage = open_stage(args.asset)
-    records = list_drives(stage)
+    with _printed_warnings():
+        stage = open_stage(args.asset)
+        records = list_drives(stage)
     units = stage_units(stage)
     if args.format == "json":
 
@@ -187,4 +268,6 @@ def _show(args: argparse.Namespace) -> int:
     print(format_table(header, rows))
     print("units: revolute N*m, rad/s, N*m*s/rad, (rad/s)/(N*m); prismatic N, m/s, N*s/m, (m/s)/N")
     print("'-': no PhysxDrivePerformanceEnvelopeAPI (PhysX uses maxForce alone)")
+    if not all(r.in_articulation for r in records):
+        print("artic. NO: PhysX does not make it an articulation joint and ignores its envelope")
     return 0
