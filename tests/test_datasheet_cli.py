@@ -179,7 +179,7 @@ BAD_CASES = [
     ("efficiency percent", AK80.replace("efficiency = 0.92", 'efficiency = "120 %"'), "'gear.efficiency'"),
     ("missing name", AK80.replace('name = "T-Motor AK80-6"\n', ""), "missing required key 'name'"),
     ("torque in rpm", AK80.replace('"0.091 N*m/A"', '"3000 rpm"'),
-     "'motor.torque_constant': '3000 rpm' has dimension"),
+     "'motor.torque_constant': '3000 rpm' is not a torque constant in N*m/A"),
     ("unknown unit", AK80.replace('"24 A"', '"24 blorps"'), "unknown unit 'blorps'"),
     ("not a number", AK80.replace("ratio = 6.0", "ratio = [6]"), "'gear.ratio'"),
     ("bad enum", AK80.replace("[gear]", 'gradient_method = "resistence"\n\n[gear]'),

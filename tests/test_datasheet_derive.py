@@ -69,6 +69,7 @@ def test_spec_example_json() -> None:
         "motor_torque": None,
         "gear_torque": None,
         "output_rating": None,
+        "output_stall": None,
     }
     assert d["max_actuator_velocity_limited_by"] == "voltage"
     assert list(d["max_actuator_velocity_limits"]) == list(VELOCITY_LIMITS)
@@ -253,11 +254,18 @@ def test_auto_falls_back_to_output_gradient() -> None:
     assert d.envelope.speed_effort_gradient == 0.25
 
 
-@pytest.mark.parametrize("extra", [{}, {"max_speed": "300 rpm"}])
-def test_explicit_method_with_missing_inputs_is_an_error(extra: dict[str, Any]) -> None:
-    """Refuse an explicit method whose inputs are missing, whichever limit binds."""
+def test_explicit_method_with_missing_inputs_is_an_error_when_the_voltage_limit_binds() -> None:
+    """Refuse an explicit method whose inputs are missing when its gradient is needed (voltage binds)."""
     with pytest.raises(InputError, match=r"test.toml: gradient method 'nominal'.*motor.no_load_speed"):
-        derive(sheet(motor={"gradient_method": "nominal", **extra}))
+        derive(sheet(motor={"gradient_method": "nominal"}))
+
+
+def test_explicit_method_not_needed_when_a_mechanical_limit_binds() -> None:
+    """Say in a note that the method was not needed when the motor's gradient is not used (issue 18)."""
+    d = derive(sheet(motor={"max_speed": "300 rpm"}), gradient_method="nominal")
+    assert d.max_actuator_velocity_limited_by == "motor_speed"
+    assert d.envelope.speed_effort_gradient == 0.0
+    assert any("gradient method 'nominal' not needed" in note for note in d.notes)
 
 
 def test_efficiency_does_not_enter_the_gradient() -> None:

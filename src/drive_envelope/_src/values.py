@@ -2,7 +2,8 @@
 
 Every place that takes a value from a file, a dict, a config or a command-line flag reads it with
 :func:`read_quantity` (or :func:`read_joint_quantity` when the joint type is not known), so
-``"inf"``, ``"300 rpm"`` and a bare SI number mean the same thing everywhere.
+``"inf"``, ``"300 rpm"`` and a bare SI number mean the same thing everywhere. A bare number is SI:
+``12`` in a file, ``"12"`` quoted and ``--set key=12`` are all 12 in the key's SI unit.
 """
 
 from __future__ import annotations
@@ -21,9 +22,16 @@ INFINITY_WORDS = ("inf", "+inf", "infinity", "+infinity")
 """Spellings of an unbounded value (case-insensitive), e.g. ``max_actuator_velocity = "inf"``."""
 
 
-def nearest_key(key: str, valid: Iterable[str]) -> str:
-    """Return ``" (did you mean 'x'?)"`` for the closest valid key, or ``""`` when none is close."""
-    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
+def nearest_key(key: str, valid: Iterable[str], *, cutoff: float = 0.5) -> str:
+    """Return ``" (did you mean 'x'?)"`` for the closest valid key, or ``""`` when none is close.
+
+    Args:
+        key: The key as written.
+        valid: The keys that exist there.
+        cutoff: Similarity in [0, 1] a suggestion needs (difflib's ratio); short names such as
+            section names need a higher one, or every short word "looks like" one of them.
+    """
+    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=cutoff)
     return f" (did you mean {match[0]!r}?)" if match else ""
 
 

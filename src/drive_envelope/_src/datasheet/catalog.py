@@ -1,14 +1,16 @@
 """The catalog: real actuators as datasheet files shipped in ``drive_envelope/catalog/*.toml``.
 
 Each file is a datasheet (see :mod:`~drive_envelope._src.datasheet.load`) whose every number carries
-its source (document URL, table or page) in a comment. A value the datasheet does not print is left
-out, so the derivation reports that limit as missing.
+its source (document and URL, table or page) in a comment on its line, typed in the vendor's units.
+A value the vendor does not print is left out, so the derivation reports that limit as missing,
+and the file's comments say what is missing.
 """
 
 from __future__ import annotations
 
 import difflib
 import importlib.resources
+import re
 from dataclasses import dataclass
 from importlib.resources.abc import Traversable
 
@@ -17,7 +19,17 @@ from drive_envelope._src.datasheet.spec import Datasheet
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 
-__all__ = ["CatalogEntry", "catalog_entries", "catalog_entry", "catalog_text", "load_catalog_datasheet"]
+__all__ = [
+    "CatalogEntry",
+    "SourcedValue",
+    "catalog_entries",
+    "catalog_entry",
+    "catalog_sources",
+    "catalog_text",
+    "load_catalog_datasheet",
+]
+
+_JOINTS = ("revolute", "prismatic")
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -32,6 +44,20 @@ class CatalogEntry:
     """``"revolute"`` or ``"prismatic"``."""
     description: str
     """One line about the actuator."""
+    sources: tuple[str, ...] = ()
+    """Document URLs the numbers come from."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class SourcedValue:
+    """One value of a catalog file with the source comment written beside it."""
+
+    key: str
+    """Dotted key, ``section.key``."""
+    value: str
+    """The value as written in the file (vendor units)."""
+    source: str
+    """The comment on its line: the document, table or page, and the printed text."""
 
 
 def _directory() -> Traversable:
@@ -42,14 +68,31 @@ def _files() -> dict[str, Traversable]:
     return {f.name[: -len(".toml")]: f for f in _directory().iterdir() if f.name.endswith(".toml")}
 
 
-def catalog_entries() -> list[CatalogEntry]:
-    """Every catalog actuator, sorted by key."""
+def catalog_entries(*, joint: str | None = None, search: str | None = None) -> list[CatalogEntry]:
+    """Catalog actuators sorted by key, optionally filtered.
+
+    Args:
+        joint: Only ``"revolute"`` or only ``"prismatic"`` actuators.
+        search: Words that must all appear (case-insensitive) in the key, name, description or
+            source URLs, e.g. ``"unitree"`` or ``"dynamixel 12 v"``.
+
+    Raises:
+        InputError: ``joint`` is not ``revolute`` or ``prismatic``.
+    """
+    if joint is not None and joint not in _JOINTS:
+        raise InputError(f"--joint {joint!r}: expected 'revolute' or 'prismatic'")
+    words = search.lower().split() if search else []
     entries = []
-    for key, _ in sorted(_files().items()):
+    for key in sorted(_files()):
         sheet = load_catalog_datasheet(key)
-        entries.append(
-            CatalogEntry(key=key, name=sheet.name, joint=sheet.joint, description=sheet.description)
+        entry = CatalogEntry(
+            key=key, name=sheet.name, joint=sheet.joint, description=sheet.description, sources=sheet.sources
         )
+        if joint is not None and entry.joint != joint:
+            continue
+        text = " ".join([entry.key, entry.name, entry.description, *entry.sources]).lower()
+        if all(word in text for word in words):
+            entries.append(entry)
     return entries
 
 
@@ -70,6 +113,35 @@ def catalog_entry(name: str) -> str | None:
 def catalog_text(name: str) -> str:
     """The datasheet file of a catalog actuator, comments (sources) included."""
     return _files()[_key(name)].read_text(encoding="utf-8")
+
+
+_SECTION = re.compile(r"^\s*\[([A-Za-z_]+)\]")
+_VALUE = re.compile(r"^\s*([A-Za-z_]+)\s*=\s*(.+?)\s*(?:#\s*(.*))?$")
+
+
+def catalog_sources(name: str) -> list[SourcedValue]:
+    """Every value of a catalog actuator's datasheet with the source comment on its line, in file order."""
+    values: list[SourcedValue] = []
+    section = ""
+    for line in catalog_text(name).splitlines():
+        header = _SECTION.match(line)
+        if header is not None:
+            section = header.group(1)
+            continue
+        match = _VALUE.match(line)
+        if match is None or not section:
+            continue
+        value, comment = _split_comment(match.group(2), match.group(3))
+        values.append(SourcedValue(key=f"{section}.{match.group(1)}", value=value, source=comment))
+    return values
+
+
+def _split_comment(value: str, comment: str | None) -> tuple[str, str]:
+    """Keep a ``#`` inside a quoted value (``"0.14 s/60°"`` has none, but a URL could) with the value."""
+    if value.count('"') % 2 == 1 and comment is not None:  # the '#' was inside the string
+        head, _, tail = comment.partition('"')
+        value, comment = f'{value}#{head}"', tail.lstrip(" #")
+    return value.strip(), (comment or "").strip()
 
 
 def load_catalog_datasheet(name: str) -> Datasheet:

@@ -1,8 +1,9 @@
 """Reading datasheet files (TOML, JSON or YAML) into a :class:`Datasheet`, with strict validation.
 
-Every quantity is a bare number in the SI unit of its key or a string with units as datasheets
-print them (``"91 mNm/A"``, ``"3000 min^-1"``). Every mistake raises ``InputError`` with one line
-naming the file, the key, the value and what was expected.
+Every quantity is a bare number in the SI unit of its key (quoted or not) or a string with units as
+datasheets print them (``"91 mNm/A"``, ``"3000 min^-1"``). Every mistake raises ``InputError`` with
+one line naming the file, the key, the value and what was expected; a value of the wrong dimension
+also names the key that takes that dimension (``'100 rpm/V' ... did you mean motor.speed_constant?``).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from drive_envelope._src.datasheet.spec import (
@@ -22,13 +24,14 @@ from drive_envelope._src.datasheet.spec import (
     ParamSource,
     ScrewSpec,
 )
-from drive_envelope._src.errors import InputError
+from drive_envelope._src.errors import InputError, UnitsError
 from drive_envelope._src.io.files import read_mapping
-from drive_envelope._src.units import to_si
+from drive_envelope._src.units import converts_to, describe_unit, to_si
 from drive_envelope._src.values import nearest_key
 
 __all__ = [
     "DATASHEET_SECTIONS",
+    "KEY_ALIASES",
     "SECTION_KEYS",
     "datasheet_from_mapping",
     "is_datasheet_mapping",
@@ -99,6 +102,10 @@ SECTION_KEYS: dict[str, dict[str, _Rule]] = {
         "velocity_at_max_effort": ("speed", ">=0", "joint"),
         "speed_effort_gradient": ("gradient", ">0", "joint"),
         "velocity_dependent_resistance": ("resistance_joint", ">=0", "joint"),
+        "stall_effort": ("torque", ">0", "joint"),
+        "no_load_velocity": ("speed", ">0", "joint"),
+        "nominal_effort": ("torque", ">0", "joint"),
+        "nominal_velocity": ("speed", ">0", "joint"),
     },
     "screw": {
         "lead": ("lead", ">0", "motor"),
@@ -106,6 +113,15 @@ SECTION_KEYS: dict[str, dict[str, _Rule]] = {
     },
 }
 _REQUIRED = {"gear": "ratio", "screw": "lead"}
+KEY_ALIASES: dict[str, dict[str, str]] = {
+    "output": {
+        "stall_torque": "stall_effort",
+        "stall_force": "stall_effort",
+        "no_load_speed": "no_load_velocity",
+    },
+}
+"""Other names vendors use for a key: section -> alias -> key. Each means exactly the key."""
+_ALIAS_JOINT = {"stall_torque": "revolute", "stall_force": "prismatic"}
 
 
 def load_datasheet(
@@ -151,8 +167,10 @@ def datasheet_from_mapping(
         )
     units = _LINEAR if joint == "prismatic" and "screw" not in merged else _ROTARY
     joint_units = _LINEAR if joint == "prismatic" else _ROTARY
+    notes: list[str] = []
+    context = _Reading(units=units, joint_units=joint_units, joint=joint, source=source, notes=notes)
     sections = {
-        section: _read_section(merged[section], section, units, joint_units, source)
+        section: _read_section(merged[section], section, context)
         for section in DATASHEET_SECTIONS
         if section in merged
     }
@@ -173,7 +191,24 @@ def datasheet_from_mapping(
         sources=_sources(merged, source),
         source=source,
         provenance=provenance,
+        notes=tuple(notes),
     )
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class _Reading:
+    """What reading one file needs besides the values: units, joint type, source and a note sink."""
+
+    units: dict[str, str]
+    """SI units of motor-side kinds (linear for a linear motor)."""
+    joint_units: dict[str, str]
+    """SI units of joint-side kinds."""
+    joint: str
+    """``"revolute"`` or ``"prismatic"``."""
+    source: str
+    """File or catalog name, for messages."""
+    notes: list[str]
+    """Collects how ambiguous spellings were read."""
 
 
 def _apply_overrides(
@@ -192,14 +227,21 @@ def _apply_overrides(
         if section not in SECTION_KEYS:
             hint = nearest_key(section, list(SECTION_KEYS))
             raise InputError(f"override {dotted!r}: unknown section {section!r}{hint}")
-        if key not in SECTION_KEYS[section]:
-            hint = nearest_key(key, list(SECTION_KEYS[section]))
+        aliases = KEY_ALIASES.get(section, {})
+        if key not in SECTION_KEYS[section] and key not in aliases:
+            hint = nearest_key(key, [*SECTION_KEYS[section], *aliases])
             raise InputError(f"override {dotted!r}: unknown key {key!r} in [{section}]{hint}")
         table = merged.setdefault(section, {})
         if not isinstance(table, dict):
             raise InputError(f"{source}: key {section!r}: expected a table [{section}], got {table!r}")
+        canonical = aliases.get(key, key)
+        for alias, target in aliases.items():  # the override replaces the key under any of its names
+            if target == canonical and alias != key:
+                table.pop(alias, None)
+        if canonical != key:
+            table.pop(canonical, None)
         table[key] = value
-        provenance[dotted] = "user"
+        provenance[f"{section}.{canonical}"] = "user"
     return merged, provenance
 
 
@@ -208,7 +250,11 @@ def _check_top_level(data: Mapping[str, Any], source: str) -> None:
         if key in _TOP_KEYS:
             continue
         owner = [s for s, keys in SECTION_KEYS.items() if key in keys]
-        hint = f" (it belongs in section [{owner[0]}])" if owner else nearest_key(str(key), _TOP_KEYS)
+        hint = (
+            f" (it belongs in section [{owner[0]}])"
+            if owner
+            else nearest_key(str(key), _TOP_KEYS, cutoff=0.75)
+        )
         raise InputError(f"{source}: unknown key or section {key!r}{hint}; valid: {', '.join(_TOP_KEYS)}")
 
 
@@ -228,31 +274,47 @@ def _sources(data: Mapping[str, Any], source: str) -> tuple[str, ...]:
     return tuple(value)
 
 
-def _read_section(
-    table: object, section: str, units: dict[str, str], joint_units: dict[str, str], source: str
-) -> dict[str, Any]:
+def _read_section(table: object, section: str, reading: _Reading) -> dict[str, Any]:
+    source = reading.source
     if not isinstance(table, Mapping):
         raise InputError(f"{source}: key {section!r}: expected a table [{section}], got {table!r}")
     spec = SECTION_KEYS[section]
+    aliases = KEY_ALIASES.get(section, {})
+    written: dict[str, str] = {}  # key -> the name it was written under
     for key in table:
-        if key not in spec:
+        if key not in spec and key not in aliases:
             raise InputError(
-                f"{source}: unknown key {f'{section}.{key}'!r}{nearest_key(str(key), list(spec))}; "
+                f"{source}: unknown key {f'{section}.{key}'!r}{nearest_key(str(key), [*spec, *aliases])}; "
                 f"valid keys in [{section}]: {', '.join(spec)}"
             )
+        canonical = aliases.get(str(key), str(key))
+        if canonical in written:
+            raise InputError(
+                f"{source}: keys {f'{section}.{written[canonical]}'!r} and {f'{section}.{key}'!r} "
+                f"both given; they are the same key ({section}.{canonical}): keep one"
+            )
+        if key in _ALIAS_JOINT and _ALIAS_JOINT[key] != reading.joint:
+            other = "stall_force" if reading.joint == "prismatic" else "stall_torque"
+            raise InputError(
+                f"{source}: key {f'{section}.{key}'!r}: a {reading.joint} joint has a {other} "
+                f"(or write {section}.{canonical})"
+            )
+        written[canonical] = str(key)
     required = _REQUIRED.get(section)
-    if required is not None and required not in table:
+    if required is not None and required not in written:
         raise InputError(f"{source}: section [{section}] needs key {required!r}")
     values: dict[str, Any] = {}
-    for key, raw in table.items():
+    for key, name in written.items():
+        raw = table[name]
         kind, rule, side = spec[key]
-        where = f"{source}: key {f'{section}.{key}'!r}"
+        where = f"{source}: key {f'{section}.{name}'!r}"
         if kind == "enum":
             values[key] = _read_enum(raw, where)
         elif kind == "points":
-            values[key] = _read_points(raw, units, where)
+            values[key] = _read_points(raw, reading.units, where)
         else:
-            values[key] = _read_value(raw, kind, rule, units if side == "motor" else joint_units, where)
+            units = reading.units if side == "motor" else reading.joint_units
+            values[key] = _read_value(raw, kind, rule, units, where, reading, (section, key))
     return values
 
 
@@ -260,28 +322,67 @@ def _unit_of(kind: str, units: dict[str, str]) -> str:
     return _FIXED.get(kind) or units[kind]
 
 
-def _read_value(raw: object, kind: str, rule: str, units: dict[str, str], where: str) -> float:
-    if kind == "ratio" and isinstance(raw, str) and ":" in raw:
-        value = _read_ratio(raw, where)
-    elif kind == "lead":
-        value = _read_lead(raw, where)
-    else:
-        value = to_si(raw, _unit_of(kind, units), where)
+def _read_value(
+    raw: object,
+    kind: str,
+    rule: str,
+    units: dict[str, str],
+    where: str,
+    reading: _Reading,
+    key: tuple[str, str],
+) -> float:
+    try:
+        if kind == "ratio" and isinstance(raw, str) and ":" in raw:
+            value = _read_ratio(raw, where, reading.notes)
+        elif kind == "lead":
+            value = _read_lead(raw, where)
+        else:
+            value = to_si(raw, _unit_of(kind, units), where)
+    except UnitsError as exc:
+        raise UnitsError(f"{exc}{_neighbour_hint(raw, key, reading)}") from None
     _check_rule(value, raw, rule, where)
     return value
 
 
-def _read_ratio(raw: str, where: str) -> float:
-    """Read a ratio printed as ``"6:1"`` (motor turns : output turns)."""
-    match = re.fullmatch(r"\s*([0-9.]+)\s*:\s*([0-9.]+)\s*", raw)
+def _neighbour_hint(raw: object, key: tuple[str, str], reading: _Reading) -> str:
+    """``": it reads as a speed constant ...: did you mean motor.speed_constant?"`` or ``""``."""
+    if not isinstance(raw, str):
+        return ""
+    section = key[0]
+    ordered = [section] + [s for s in SECTION_KEYS if s != section]
+    for candidate_section in ordered:
+        for candidate, (kind, _, side) in SECTION_KEYS[candidate_section].items():
+            if (candidate_section, candidate) == key or kind in ("enum", "points", "lead"):
+                continue
+            units = reading.units if side == "motor" else reading.joint_units
+            unit = _unit_of(kind, units)
+            if converts_to(raw, unit):
+                words = describe_unit(unit).split(" in ")[0]
+                return f"; {raw!r} reads as {words}: did you mean {candidate_section}.{candidate}?"
+    return ""
+
+
+def _read_ratio(raw: str, where: str, notes: list[str]) -> float:
+    """Read a ratio printed as ``"6:1"`` (motor turns : output turns); ``"1:50"`` is a reduction of 50."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*:\s*([0-9]*\.?[0-9]+)\s*", raw)
     try:
         if match is None:
             raise ValueError(raw)
-        return float(match.group(1)) / float(match.group(2))
+        first, second = float(match.group(1)), float(match.group(2))
+        value = first / second
     except (ValueError, ZeroDivisionError):
         raise InputError(
             f'{where}: cannot read {raw!r} as a gear ratio (write 6, "6:1" or "6 : 1")'
         ) from None
+    if 0.0 < first < second:
+        # vendors print reductions both ways ("1:50" and "50:1"); a speed-up gear is rare and must
+        # be written as a plain number, so the smaller-first spelling is read as a reduction
+        notes.append(
+            f"{where.split(': key ')[-1]} = {raw!r} read as a reduction of {second / first:g} "
+            f"(i_G = motor speed / output speed); write a speed-up gear as a number, e.g. {first / second:g}"
+        )
+        return second / first
+    return value
 
 
 def _read_lead(raw: object, where: str) -> float:
@@ -357,6 +458,7 @@ def _check_pairs(sections: Mapping[str, dict[str, Any]], source: str) -> None:
                 f"{output['velocity_at_max_effort']:g} exceeds "
                 f"'output.max_velocity' {output['max_velocity']:g} (SI)"
             )
+    _check_output_line(output, source)
     if (
         "no_load_speed" in motor
         and "nominal_speed" in motor
@@ -365,4 +467,21 @@ def _check_pairs(sections: Mapping[str, dict[str, Any]], source: str) -> None:
         raise InputError(
             f"{source}: key 'motor.no_load_speed': {motor['no_load_speed']:g} must exceed "
             f"'motor.nominal_speed' {motor['nominal_speed']:g} (SI)"
+        )
+
+
+def _check_output_line(output: Mapping[str, Any], source: str) -> None:
+    """The nominal point needs the no-load speed and its effort, and lies below the no-load speed."""
+    if "nominal_velocity" not in output:
+        return
+    for needed in ("nominal_effort", "no_load_velocity"):
+        if needed not in output:
+            raise InputError(
+                f"{source}: key 'output.nominal_velocity' needs 'output.{needed}' "
+                "(a point on the speed-effort line through the no-load speed)"
+            )
+    if not output["nominal_velocity"] < output["no_load_velocity"]:
+        raise InputError(
+            f"{source}: key 'output.nominal_velocity': {output['nominal_velocity']:g} must be below "
+            f"'output.no_load_velocity' {output['no_load_velocity']:g} (SI)"
         )

@@ -71,6 +71,7 @@ def derivation_report(derivation: Derivation) -> str:
 _RESISTANCE_WORDS = {
     "direct": "given directly",
     "fitted": "fitted from operating points",
+    "speed_torque_line": "the operating points are the speed-torque line (eq. 2): 0",
     "none": "no loss data: 0",
 }
 

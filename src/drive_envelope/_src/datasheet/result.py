@@ -64,11 +64,11 @@ class Derivation:
     max_actuator_velocity_limited_by: str
     """Name of the binding candidate."""
     speed_effort_gradient_method: str
-    """datasheet | resistance | nominal | mechanical | output_rating | unavailable."""
+    """datasheet | resistance | nominal | mechanical | output_rating | output_line | unavailable."""
     speed_effort_gradient_reason: str
     """Why that method, in one sentence."""
     velocity_dependent_resistance_method: str
-    """direct | fitted | none."""
+    """direct | fitted | speed_torque_line | none."""
     provenance: Mapping[str, ParamSource] = field(default_factory=dict)
     """Where each envelope parameter and each input came from (``section.key`` or parameter name)."""
     notes: tuple[str, ...] = ()

@@ -112,26 +112,66 @@ class LossesSpec:
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class OutputRating:
-    """Ratings of the whole actuator at its output (joint side), not scaled by the gear."""
+    """Ratings of the whole actuator at its output (joint side), not scaled by the gear.
+
+    Two kinds of numbers live here. ``max_effort`` and ``max_velocity`` are plain caps (a peak
+    torque, a firmware speed limit): alone they give a rectangle, speed_effort_gradient 0.
+    ``stall_effort`` and ``no_load_velocity`` are the two ends of the actuator's speed-effort line,
+    as servo and gearmotor datasheets print them: together they give the gradient
+    ``no_load_velocity / stall_effort``. A point on that line, ``nominal_velocity`` at
+    ``nominal_effort`` (a rated speed at the rated torque), gives it as
+    ``(no_load_velocity - nominal_velocity) / nominal_effort`` (the spec's nominal method).
+    """
 
     max_effort: float | None = None
-    """Stall or peak output effort [N*m or N]."""
+    """Peak output effort, a cap [N*m or N]."""
     max_velocity: float | None = None
-    """No-load output velocity [rad/s or m/s]."""
+    """Output velocity cap [rad/s or m/s]."""
     velocity_at_max_effort: float | None = None
     """Output velocity at ``max_effort`` [rad/s or m/s]; gives the gradient
     ``(max_velocity - velocity_at_max_effort) / max_effort``."""
     speed_effort_gradient: float | None = None
-    """Output speed-effort gradient [(rad/s)/(N*m) or (m/s)/N]."""
+    """Output speed-effort gradient as printed [(rad/s)/(N*m) or (m/s)/N]."""
     velocity_dependent_resistance: float | None = None
     """k_tau_v at the output [N*m*s/rad or N*s/m]."""
+    stall_effort: float | None = None
+    """Stall torque or force: the effort at zero speed, the line's effort end [N*m or N]. Read from
+    ``stall_effort``, ``stall_torque`` or ``stall_force``."""
+    no_load_velocity: float | None = None
+    """No-load output velocity: the speed at zero effort, the line's speed end [rad/s or m/s]. Read
+    from ``no_load_velocity`` or ``no_load_speed``."""
+    nominal_effort: float | None = None
+    """Rated (continuous) output effort [N*m or N]; the effort cap for ``--duty continuous``."""
+    nominal_velocity: float | None = None
+    """Output velocity at ``nominal_effort`` on the speed-effort line [rad/s or m/s]."""
 
-    def gradient(self) -> float | None:
-        """The output gradient [(rad/s)/(N*m) or (m/s)/N], or None when the rating has none."""
+    def rating_gradient(self) -> tuple[float, str] | None:
+        """The gradient of the ``max_velocity`` cap, or None.
+
+        Returns:
+            ``(value [(rad/s)/(N*m) or (m/s)/N], formula)`` or None.
+        """
         if self.speed_effort_gradient is not None:
-            return self.speed_effort_gradient
+            return self.speed_effort_gradient, "output speed_effort_gradient"
         if self.velocity_at_max_effort is not None and self.max_velocity is not None and self.max_effort:
-            return (self.max_velocity - self.velocity_at_max_effort) / self.max_effort
+            value = (self.max_velocity - self.velocity_at_max_effort) / self.max_effort
+            return value, "(max_velocity - velocity_at_max_effort) / max_effort"
+        return None
+
+    def line_gradient(self) -> tuple[float, str] | None:
+        """The gradient of the no-load line ``(value [(rad/s)/(N*m) or (m/s)/N], formula)``, or None.
+
+        The order: a printed ``speed_effort_gradient``, then the two ends (stall), then the nominal
+        point.
+        """
+        v0 = self.no_load_velocity
+        if self.speed_effort_gradient is not None:
+            return self.speed_effort_gradient, "output speed_effort_gradient"
+        if v0 is not None and self.stall_effort:
+            return v0 / self.stall_effort, "no_load_velocity / stall_effort"
+        if v0 is not None and self.nominal_velocity is not None and self.nominal_effort:
+            value = (v0 - self.nominal_velocity) / self.nominal_effort
+            return value, "(no_load_velocity - nominal_velocity) / nominal_effort"
         return None
 
 
@@ -173,6 +213,8 @@ class Datasheet:
     """File (or catalog name) it was read from; starts every error message."""
     provenance: Mapping[str, ParamSource] = field(default_factory=dict)
     """``"section.key"`` -> ``"datasheet"`` or ``"user"`` (set with an override) for each value given."""
+    notes: tuple[str, ...] = ()
+    """How the file was read where it could be read two ways (e.g. a ratio written ``"1:50"``)."""
 
     @property
     def linear_motor(self) -> bool:
@@ -219,8 +261,10 @@ class Transmission:
 
     def motor_gradient(self, gradient: float) -> float:
         """Joint speed-effort gradient of a motor gradient [(rad/s)/(N*m) or (m/s)/N]."""
-        return gradient / (self.ratio * self.screw_factor) ** 2
+        reduction = self.ratio * self.screw_factor
+        return gradient / reduction / reduction  # not **2: an extreme ratio gives 0 or inf, not an error
 
     def motor_resistance(self, resistance: float) -> float:
         """Joint velocity-dependent resistance of a motor-side one [N*m*s/rad or N*s/m]."""
-        return resistance * (self.ratio * self.screw_factor) ** 2 * self.efficiency * self.screw_efficiency
+        reduction = self.ratio * self.screw_factor
+        return resistance * reduction * reduction * self.efficiency * self.screw_efficiency

@@ -45,7 +45,8 @@ def register(subparsers: Any) -> None:
         action="append",
         default=[],
         metavar="SECTION.KEY=VALUE",
-        help="override a datasheet value, e.g. --set controller.max_voltage='48 V' (repeatable)",
+        help="override a datasheet value, e.g. --set controller.max_voltage='48 V' (repeatable; a bare "
+        "number is SI, as in a file)",
     )
     parser.add_argument(
         "--approximate-line",
@@ -97,7 +98,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _overrides(items: list[str]) -> dict[str, object]:
-    """``SECTION.KEY=VALUE`` strings -> mapping; a plain number stays a number (SI)."""
+    """``SECTION.KEY=VALUE`` strings -> mapping of strings, read like a quoted value in a file.
+
+    The value stays text: the datasheet reader applies the one rule for values, so a bare number is
+    SI exactly as in a file (``--set gear.ratio=6`` and ``ratio = "6"`` mean the same), and
+    ``1e400``, ``nan`` or ``1_000`` are refused the same way.
+    """
     from drive_envelope._src.errors import InputError
 
     result: dict[str, object] = {}
@@ -107,10 +113,9 @@ def _overrides(items: list[str]) -> dict[str, object]:
             raise InputError(
                 f"--set {item!r}: expected SECTION.KEY=VALUE, e.g. controller.max_voltage='48 V'"
             )
-        try:
-            result[key.strip()] = float(value)
-        except ValueError:
-            result[key.strip()] = value.strip()
+        if key.strip() in result:
+            raise InputError(f"--set {key.strip()!r} given twice; give each key once")
+        result[key.strip()] = value.strip()
     return result
 
 

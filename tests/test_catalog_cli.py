@@ -1,0 +1,121 @@
+"""`drive-envelope catalog`: filters, --sources, --maps and the CLI conventions (--format, --json, errors)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import drive_envelope.datasheet as public
+from drive_envelope._src.cli.main import main
+from drive_envelope._src.datasheet.catalog import catalog_entries, catalog_sources
+
+CATALOG = Path(public.__file__).parent / "catalog"
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """Run the CLI; return (exit code, stdout, stderr)."""
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_joint_filter_lists_only_linear_actuators(capsys: pytest.CaptureFixture[str]) -> None:
+    """--joint prismatic: the Actuonix linear servos and nothing rotary."""
+    code, out, _ = run(capsys, "catalog", "--joint", "prismatic", "--json")
+    assert code == 0
+    items = json.loads(out)
+    assert items and all(item["joint"] == "prismatic" for item in items)
+    assert {"actuonix-l16-63-6-r", "actuonix-l12-50-210-12-s"} <= {item["key"] for item in items}
+    expected = {e.key for e in catalog_entries() if e.joint == "prismatic"}
+    assert {item["key"] for item in items} == expected
+
+
+def test_search_matches_all_words_case_insensitively(capsys: pytest.CaptureFixture[str]) -> None:
+    """--search 'Unitree G1': every G1 motor, no Go2 or H1 entry."""
+    code, out, _ = run(capsys, "catalog", "--search", "Unitree G1", "--json")
+    keys = {item["key"] for item in json.loads(out)}
+    assert code == 0
+    assert {"unitree-g1-5020", "unitree-g1-7520-14", "unitree-g1-7520-22", "unitree-g1-4010"} <= keys
+    assert not any(k.startswith(("unitree-go", "unitree-h1")) for k in keys)
+
+
+def test_search_unitree_finds_every_unitree_entry(capsys: pytest.CaptureFixture[str]) -> None:
+    """--search unitree: the entries whose key starts with unitree- (and only Unitree's)."""
+    code, out, _ = run(capsys, "catalog", "--search", "unitree")
+    assert code == 0
+    listed = {line.split()[0] for line in out.splitlines() if line.startswith("unitree-")}
+    assert listed == {p.stem for p in CATALOG.glob("unitree-*.toml")}
+
+
+def test_listing_shows_the_derived_envelope(capsys: pytest.CaptureFixture[str]) -> None:
+    """The JSON list carries the derived numbers: the Go2 calf is 35.55 N*m, 20.07 rad/s (Unitree URDF)."""
+    _, out, _ = run(capsys, "catalog", "--search", "go2 calf", "--json")
+    (item,) = json.loads(out)
+    assert item["max_effort"] == 35.55 and item["max_actuator_velocity"] == 20.07
+    assert item["sources"] and all(url.startswith("https://") for url in item["sources"])
+
+
+def test_no_match_is_a_warning_not_an_error(capsys: pytest.CaptureFixture[str]) -> None:
+    """A filter that matches nothing prints a warning on stderr and exits 0 with an empty list."""
+    code, out, err = run(capsys, "catalog", "--search", "no such vendor")
+    assert code == 0 and out == "" and "no catalog actuator matches" in err
+
+
+def test_sources_table_quotes_the_document(capsys: pytest.CaptureFixture[str]) -> None:
+    """catalog KEY --sources prints each value with the text it was typed from, and the documents."""
+    code, out, _ = run(capsys, "catalog", "robstride-rs01", "--sources")
+    assert code == 0
+    assert '"17 N.m"' in out and "Peak load: 17 N.m" in out
+    assert "RS01User%20Manual260428.pdf" in out
+
+
+def test_sources_json_has_every_value_of_the_file(capsys: pytest.CaptureFixture[str]) -> None:
+    """--sources --json: one item per value in the file, each with a non-empty source."""
+    code, out, _ = run(capsys, "catalog", "unitree-go-m8010-6", "--sources", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["key"] == "unitree-go-m8010-6" and data["joint"] == "revolute"
+    assert data["values"] == [
+        {"key": v.key, "value": v.value, "source": v.source} for v in catalog_sources("unitree-go-m8010-6")
+    ]
+    assert all(v["source"] for v in data["values"])
+
+
+def test_show_prints_the_file(capsys: pytest.CaptureFixture[str]) -> None:
+    """catalog KEY prints the datasheet file itself (a user can copy and edit it)."""
+    code, out, _ = run(capsys, "catalog", "feetech-sts3215-c001")
+    assert code == 0 and out == (CATALOG / "feetech-sts3215-c001.toml").read_text(encoding="utf-8")
+
+
+def test_maps_lists_the_shipped_robot_maps(capsys: pytest.CaptureFixture[str]) -> None:
+    """catalog --maps --json: every shipped map with its robot and installed file."""
+    code, out, _ = run(capsys, "catalog", "--maps", "--json")
+    maps = {m["key"]: m for m in json.loads(out)}
+    assert code == 0
+    assert {"unitree-go2", "unitree-g1", "so101", "franka-panda"} <= set(maps)
+    assert Path(maps["unitree-go2"]["path"]).is_file()
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["catalog", "--sources"], "--sources needs an actuator NAME"),
+        (["catalog", "robstride-rs1", "--sources"], "did you mean 'robstride-rs01'?"),
+        (["catalog", "robstride-rs01", "--joint", "revolute"], "give them without NAME"),
+        (["catalog", "--maps", "--search", "go2"], "give it alone"),
+        (["catalog", "--joint", "ball"], "invalid choice"),
+    ],
+)
+def test_mistakes_are_one_line_errors(
+    capsys: pytest.CaptureFixture[str], argv: list[str], fragment: str
+) -> None:
+    """Bad combinations exit 2 with one line on stderr naming the problem."""
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own usage errors
+        code = int(exc.code or 0)
+    err = capsys.readouterr().err
+    assert code == 2 and fragment in err
+    if "invalid choice" not in fragment:
+        assert err.strip().count("\n") == 0
