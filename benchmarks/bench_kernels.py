@@ -2,9 +2,12 @@
 
 Sections (each skipped when its package is missing; the GPU rows only when CUDA is present):
 
-* NumPy reference (float64): explicit ``clamp_effort`` and implicit ``clamp_drive_impulse`` /
-  ``clamp_effort_implicit`` against ``np.clip`` of the same arrays (goals: explicit <= 15x,
-  implicit <= 60x).
+* NumPy reference: explicit ``clamp_effort`` and implicit ``clamp_drive_impulse`` (default mode
+  and ``physx_exact=True``, float64 and float32) / ``clamp_effort_implicit`` against ``np.clip`` of
+  the same arrays (goals: explicit <= 15x, implicit <= 60x). ``--baseline MODULE`` times another
+  implementation's ``clamp_effort``, ``clamp_drive_impulse`` and ``clamp_effort_implicit`` (same
+  signatures; e.g. the previous release's ``envelope/clamp.py`` copied under another name) in the
+  same interleaved rounds and prints ours over it.
 * Warp (float32), CPU and CUDA: the implicit envelope clamp (``drive_envelope.warp``) against
   Newton's ``ClampingDCMotor.modify_forces`` on the same arrays (goal: <= 1.5x on the CPU) and
   against a copy kernel moving the same number of bytes (goal on a GPU: <= 3x).
@@ -14,14 +17,16 @@ Sections (each skipped when its package is missing; the GPU rows only when CUDA 
 
 Every timing is the median of ``--repeats`` rounds after one warm-up round; within a section the
 candidates run interleaved (one of each per round), so load changes on a shared machine hit all of
-them alike, and ratios are taken between medians of the same run. Usage::
+them alike (the order is reversed every other round), and ratios are taken between medians of the
+same run. Usage::
 
-    python benchmarks/bench_kernels.py [--n 1000000] [--repeats 21]
+    python benchmarks/bench_kernels.py [--n 1000000] [--repeats 21] [--baseline MODULE]
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import importlib.util
 import os
 import platform
@@ -59,12 +64,15 @@ def median_times(
 ) -> list[tuple[str, float]]:
     """Median wall time [s] of each function over ``repeats`` rounds, after one warm-up round.
 
-    The functions run interleaved (one of each per round), so a load change on a shared machine
-    hits all of them alike and their ratios stay meaningful.
+    The functions run interleaved (one of each per round, the order reversed every other round),
+    so a load change on a shared machine hits all of them alike and their ratios stay meaningful.
     """
     times: dict[str, list[float]] = {name: [] for name in fns}
     for round_index in range(repeats + 1):
-        for name, fn in fns.items():
+        # every other round backwards, so that no candidate always follows the same one (what
+        # runs before a function changes its cache state: up to 15% at N = 1e6)
+        order = list(fns.items())
+        for name, fn in order if round_index % 2 else order[::-1]:
             start = time.perf_counter()
             fn()
             sync()
@@ -99,9 +107,9 @@ def inputs(n: int, dtype: type) -> dict[str, np.ndarray]:
     }
 
 
-def bench_numpy(n: int, repeats: int) -> None:
-    """Core NumPy reference (float64) against np.clip of the same arrays."""
-    print(f"\nNumPy reference, float64, N = {n:,}")
+def bench_numpy(n: int, repeats: int, baseline: str | None = None) -> None:
+    """Core NumPy reference against np.clip of the same arrays (and a baseline implementation)."""
+    print(f"\nNumPy reference, float64 (and float32), N = {n:,}")
     a = inputs(n, np.float64)
     env = de.PerformanceEnvelope(
         max_effort=12.0,
@@ -113,26 +121,54 @@ def bench_numpy(n: int, repeats: int) -> None:
     out = np.empty(n)
     impulse = [velocity, a["applied"] * DT, effort * DT, response, a["max_actuator_velocity"]]
     impulse += [cap * DT, a["speed_effort_gradient"] / DT, a["velocity_dependent_resistance"] * DT]
+    impulse32 = [x.astype(np.float32) for x in impulse]
     clip, explicit, implicit, implicit_env = (
         "np.clip(effort, -cap, cap)",
         "clamp_effort (explicit)",
         "clamp_drive_impulse (implicit, per-DOF)",
         "clamp_effort_implicit (one envelope)",
     )
+    exact, implicit32, exact32 = (
+        "clamp_drive_impulse, physx_exact=True",
+        "clamp_drive_impulse, float32",
+        "clamp_drive_impulse, float32, physx_exact",
+    )
     fns = {
         clip: lambda: np.clip(effort, -cap, cap, out=out),
         explicit: lambda: de.clamp_effort(env, effort, velocity),
         implicit: lambda: de.clamp_drive_impulse(*impulse),
         implicit_env: lambda: de.clamp_effort_implicit(env, effort, velocity, response, DT),
+        exact: lambda: de.clamp_drive_impulse(*impulse, physx_exact=True),
+        implicit32: lambda: de.clamp_drive_impulse(*impulse32, dtype=np.float32),
+        exact32: lambda: de.clamp_drive_impulse(*impulse32, dtype=np.float32, physx_exact=True),
     }
-    report(
-        median_times(fns, repeats),
-        [
-            ("explicit / np.clip", explicit, clip, 15),
-            ("implicit / np.clip", implicit, clip, 60),
-            ("implicit (effort API) / np.clip", implicit_env, clip, 60),
-        ],
-    )
+    ratios: list[tuple[str, str, str, float | None]] = [
+        ("explicit / np.clip", explicit, clip, 15),
+        ("implicit / np.clip", implicit, clip, 60),
+        ("implicit (effort API) / np.clip", implicit_env, clip, 60),
+        ("implicit, physx_exact / np.clip", exact, clip, None),
+        ("implicit, float32 / np.clip", implicit32, clip, None),
+        ("implicit, float32, physx_exact / np.clip", exact32, clip, None),
+    ]
+    if baseline is not None:
+        base = importlib.import_module(baseline)
+        fns["baseline clamp_effort"] = lambda: base.clamp_effort(env, effort, velocity)
+        fns["baseline clamp_drive_impulse"] = lambda: base.clamp_drive_impulse(*impulse)
+        fns["baseline clamp_effort_implicit"] = lambda: base.clamp_effort_implicit(
+            env, effort, velocity, response, DT
+        )
+        fns["baseline clamp_drive_impulse, float32"] = lambda: base.clamp_drive_impulse(
+            *impulse32, dtype=np.float32
+        )
+        ratios += [
+            ("explicit / baseline", explicit, "baseline clamp_effort", None),
+            ("implicit / baseline", implicit, "baseline clamp_drive_impulse", None),
+            ("implicit, physx_exact / baseline", exact, "baseline clamp_drive_impulse", None),
+            ("implicit (effort API) / baseline", implicit_env, "baseline clamp_effort_implicit", None),
+            ("implicit, float32 / baseline", implicit32, "baseline clamp_drive_impulse, float32", None),
+            ("float32, physx_exact / baseline", exact32, "baseline clamp_drive_impulse, float32", None),
+        ]
+    report(median_times(fns, repeats), ratios)
 
 
 def bench_warp(n: int, repeats: int, device: str) -> None:
@@ -211,7 +247,7 @@ def bench_torch(n: int, repeats: int, device: str) -> None:
         min_effort = torch.clip(cap * (-1.0 - vel / v_lim), min=-cap, max=zeros)
         return torch.clip(effort, min=min_effort, max=max_effort)
 
-    params = [a[k] for k in de.PerformanceEnvelope.__slots__[:4]]
+    params = dt.EnvelopeTensors(**{k: a[k] for k in de.PerformanceEnvelope.__slots__[:4]})
     impulse = [vel, a["applied"] * DT, effort * DT, a["response"], v_lim, cap * DT]
     impulse += [a["speed_effort_gradient"] / DT, a["velocity_dependent_resistance"] * DT]
     dc, explicit, eager, fused = (
@@ -222,7 +258,7 @@ def bench_torch(n: int, repeats: int, device: str) -> None:
     )
     fns = {
         dc: dc_motor_clip,
-        explicit: lambda: dt.clamp_effort(effort, vel, *params),
+        explicit: lambda: dt.clamp_effort(params, effort, vel),
         eager: lambda: dt.clamp_drive_impulse(*impulse),
         fused: lambda: dt.fused_clamp_drive_impulse(*impulse),
     }
@@ -248,9 +284,17 @@ def main() -> None:
     )
     parser.add_argument("--n", type=int, default=1_000_000, help="number of DOFs (default 1,000,000)")
     parser.add_argument("--repeats", type=int, default=21, help="timed runs per row (default 21)")
+    parser.add_argument(
+        "--baseline",
+        default=None,
+        help="module with clamp_effort/clamp_drive_impulse/clamp_effort_implicit to compare",
+    )
+    parser.add_argument("--numpy-only", action="store_true", help="run the NumPy section only")
     args = parser.parse_args()
     print(f"machine: {machine()}")
-    bench_numpy(args.n, args.repeats)
+    bench_numpy(args.n, args.repeats, args.baseline)
+    if args.numpy_only:
+        return
     if importlib.util.find_spec("warp") is not None:
         import warp as wp
 

@@ -1,4 +1,4 @@
-"""Shared input vectors of the kernel backend tests (``tests/test_kernels_*.py``).
+"""Shared input vectors of the kernel backend tests (``tests/test_kernels_*.py``, ``tests/test_clamp_*.py``).
 
 Arguments are in PhysX ``clampDriveImpulse`` order:
 ``(joint_vel0, drive_impulse0, drive_impulse, response, max_joint_vel, max_impulse,
@@ -7,6 +7,7 @@ speed_impulse_gradient, velocity_dependent_resistance)``.
 
 from __future__ import annotations
 
+import ctypes
 import itertools
 from pathlib import Path
 
@@ -80,3 +81,38 @@ def envelope_cases() -> list[dict[str, float]]:
         {"max_effort": 3.0, "velocity_dependent_resistance": 0.4},
         {"max_effort": 0.1, "max_actuator_velocity": 0.5, "speed_effort_gradient": 2.0},
     ]
+
+
+CPP_MODES = {(np.float32, False): "f32", (np.float64, False): "f64"}
+CPP_MODES.update({(np.float32, True): "physx_f32", (np.float64, True): "physx_f64"})
+"""Suffix of the C entry point ``drive_envelope_clamp_drive_impulse_<suffix>`` per (dtype, physx_exact)."""
+
+
+def cpp_clamp_library() -> ctypes.CDLL:
+    """The MuJoCo plugin library (built if missing) with its clamp entry points typed for ctypes.
+
+    Skips the calling test when MuJoCo is not installed.
+    """
+    import pytest
+
+    pytest.importorskip("mujoco")
+    from drive_envelope._src.adapters.mujoco import build, loader
+
+    try:
+        loader.load_plugin()
+    except build.PluginError:
+        build.build_plugin(quiet=True)  # `make setup` normally built it
+        loader.load_plugin()
+    handle = loader.plugin_library()
+    for (dtype, _), suffix in CPP_MODES.items():
+        kind = ctypes.c_float if dtype is np.float32 else ctypes.c_double
+        function = getattr(handle, f"drive_envelope_clamp_drive_impulse_{suffix}")
+        function.argtypes = [kind] * 8
+        function.restype = kind
+    return handle
+
+
+def cpp_clamp(lib: ctypes.CDLL, rows: np.ndarray, dtype: type, physx_exact: bool = False) -> np.ndarray:
+    """The C++ clamp row by row: ``rows`` ``(K, 8)`` in PhysX order, results of ``dtype``."""
+    function = getattr(lib, f"drive_envelope_clamp_drive_impulse_{CPP_MODES[(dtype, physx_exact)]}")
+    return np.array([function(*map(float, row)) for row in np.asarray(rows, dtype=dtype)], dtype=dtype)

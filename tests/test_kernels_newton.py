@@ -206,3 +206,43 @@ def test_import_is_light() -> None:
     code = "import sys, drive_envelope.newton\nprint('newton' in sys.modules or 'warp' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_implicit_entry_point_is_the_shared_effort_clamp() -> None:
+    """Evaluate evaluate_clamp in float64 with the shared clamp_effort_func: the core's numbers, NaN kept."""
+    import warp as wp
+
+    from drive_envelope.newton import ClampingPerformanceEnvelope
+
+    evaluate = ClampingPerformanceEnvelope.evaluate_clamp
+
+    @wp.kernel
+    def entry_point(
+        value: wp.array(dtype=wp.float64),
+        qd: wp.array(dtype=wp.float64),
+        params: wp.array2d(dtype=wp.float32),
+        out: wp.array(dtype=wp.float64),
+    ):
+        i = wp.tid()
+        out[i] = evaluate(value[i], wp.float64(0.0), qd[i], params, 0, 0)
+
+    env = de.PerformanceEnvelope(
+        max_effort=5.0,
+        max_actuator_velocity=4.0,
+        velocity_dependent_resistance=0.25,
+        speed_effort_gradient=0.5,
+    )
+    rng = np.random.default_rng(5)
+    value = np.append(rng.normal(0.0, 6.0, 500), [np.nan, 1.0])
+    qd = np.append(rng.normal(0.0, 4.0, 500), [0.0, np.nan])
+    row = [
+        env.max_effort,
+        env.max_actuator_velocity,
+        env.velocity_dependent_resistance,
+        env.speed_effort_gradient,
+    ]
+    params = wp.array(np.array([row], dtype=np.float32), dtype=wp.float32, device="cpu")
+    out = wp.zeros(len(value), dtype=wp.float64, device="cpu")
+    inputs = [wp.array(value, dtype=wp.float64, device="cpu"), wp.array(qd, dtype=wp.float64, device="cpu")]
+    wp.launch(entry_point, dim=len(value), inputs=[*inputs, params], outputs=[out], device="cpu")
+    np.testing.assert_array_equal(out.numpy(), de.clamp_effort(env, value, qd))

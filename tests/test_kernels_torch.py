@@ -57,8 +57,9 @@ def test_clamp_drive_impulse_matches_float32_reference(device: str, vectors: str
     import drive_envelope.torch as dt
 
     args = random_impulse_args() if vectors == "random" else edge_impulse_args()
-    result = dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy()
-    assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32))
+    for exact in (False, True):
+        result = dt.clamp_drive_impulse(*_tensors(args, device), physx_exact=exact).cpu().numpy()
+        assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32, physx_exact=exact))
 
 
 def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
@@ -69,7 +70,11 @@ def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
     if golden is None:
         pytest.skip("tests/golden/physx_clamp_drive_impulse.npz not present")
     args, expected = golden
-    assert _same(dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy(), expected)
+    exact = dt.clamp_drive_impulse(*_tensors(args, device), physx_exact=True).cpu().numpy()
+    assert _same(exact, expected)
+    assert np.array_equal(exact.view(np.uint32), expected.view(np.uint32))  # zeros' signs, NaN bits
+    guarded = dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy()
+    assert _same(guarded, de.clamp_drive_impulse(*args, dtype=np.float32))
 
 
 @pytest.mark.slow
@@ -81,7 +86,7 @@ def test_fused_clamp_drive_impulse_matches_eager_port() -> None:
     parts = [edge_impulse_args(), random_impulse_args(2000), *([golden[0]] if golden else [])]
     args = [np.concatenate([p[k] for p in parts]) for k in range(8)]
     try:
-        fused = dt.fused_clamp_drive_impulse(*_tensors(args, "cpu")).numpy()
+        fused = dt.fused_clamp_drive_impulse(*_tensors(args, "cpu")).numpy()  # the default mode
     except Exception as exc:  # torch.compile needs a working C++ toolchain; report, don't fail
         pytest.skip(f"torch.compile unavailable here: {type(exc).__name__}: {exc}")
     assert _same(fused, de.clamp_drive_impulse(*args, dtype=np.float32))
@@ -93,6 +98,8 @@ def test_clamp_drive_impulse_float64_matches_reference() -> None:
 
     args = [a.astype(np.float64) for a in random_impulse_args()]
     assert _same(dt.clamp_drive_impulse(*args, dtype=np.float64).numpy(), de.clamp_drive_impulse(*args))
+    exact = dt.clamp_drive_impulse(*args, dtype=np.float64, physx_exact=True).numpy()
+    assert _same(exact, de.clamp_drive_impulse(*args, physx_exact=True))
 
 
 @pytest.mark.parametrize("case", envelope_cases(), ids=lambda c: "-".join(sorted(c)))
@@ -108,16 +115,15 @@ def test_effort_ops_match_reference(device: str, case: dict[str, float]) -> None
     velocity, effort, applied = (rng.normal(0.0, s, n).astype(np.float32) for s in (4.0, 6.0, 1.0))
     response = rng.uniform(0.0, 80.0, n).astype(np.float32)
     v, e, a, r = _tensors([velocity, effort, applied, response], device)
-    params = [
-        torch.full((n,), getattr(env, name), device=device) for name in de.PerformanceEnvelope.__slots__[:4]
-    ]
+    params = dt.EnvelopeTensors.from_envelopes(env, count=n, device=device)
+    assert params.dtype == torch.float32 and params.shape == (n,)
     v64, e64, a64, r64 = (x.astype(np.float64) for x in (velocity, effort, applied, response))
     atol = 1e-5 * max(env.max_effort, 1.0)
 
-    np.testing.assert_allclose(dt.effort_limit(v, *params).cpu(), env.effort_limit(v64), rtol=1e-5, atol=atol)
-    explicit = dt.clamp_effort(e, v, *params).cpu()
+    np.testing.assert_allclose(dt.effort_limit(params, v).cpu(), env.effort_limit(v64), rtol=1e-5, atol=atol)
+    explicit = dt.clamp_effort(params, e, v).cpu()
     np.testing.assert_allclose(explicit, de.clamp_effort(env, e64, v64), rtol=1e-5, atol=atol)
-    implicit = dt.clamp_effort_implicit(e, v, r, 0.01, *params, applied_effort=a).cpu()
+    implicit = dt.clamp_effort_implicit(params, e, v, r, 0.01, applied_effort=a).cpu()
     expected = de.clamp_effort_implicit(env, e64, v64, r64, 0.01, a64)
     np.testing.assert_allclose(implicit, expected, rtol=1e-4, atol=10 * atol)
 
@@ -129,7 +135,8 @@ def test_explicit_clamp_propagates_nan() -> None:
     env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
     effort = np.array([np.nan, 1.0, 5.0, 1.0])
     velocity = np.array([0.0, np.nan, 1.0, 3.0])
-    result = dt.clamp_effort(effort, velocity, 2.0, 3.0, 0.0, 0.5, dtype=np.float64)
+    params = dt.EnvelopeTensors.from_envelopes(env, dtype=np.float64)
+    result = dt.clamp_effort(params, effort, velocity)
     assert _same(result, de.clamp_effort(env, effort, velocity))
 
 
@@ -140,10 +147,15 @@ def test_explicit_ops_broadcast_scalars_and_arrays() -> None:
     import drive_envelope.torch as dt
 
     caps = torch.tensor([1.0, 2.0, 3.0])
-    np.testing.assert_array_equal(dt.effort_limit(0.5, caps, 4.0, 0.0, 1.0), [1.0, 2.0, 3.0])
-    np.testing.assert_array_equal(dt.clamp_effort(5.0, torch.zeros(3), 2.0), [2.0, 2.0, 2.0])
-    np.testing.assert_array_equal(dt.clamp_effort(torch.tensor([5.0, -5.0]), 0.0, 2.0), [2.0, -2.0])
-    np.testing.assert_array_equal(dt.clamp_effort(-5.0, 1.0, caps), [-1.0, -2.0, -3.0])
+    per_dof = dt.EnvelopeTensors.from_values(
+        max_effort=caps, max_actuator_velocity=4.0, speed_effort_gradient=1.0
+    )
+    np.testing.assert_array_equal(dt.effort_limit(per_dof, 0.5), [1.0, 2.0, 3.0])
+    box = dt.EnvelopeTensors.from_values(max_effort=2.0)
+    np.testing.assert_array_equal(dt.clamp_effort(box, 5.0, torch.zeros(3)), [2.0, 2.0, 2.0])
+    np.testing.assert_array_equal(dt.clamp_effort(box, torch.tensor([5.0, -5.0]), 0.0), [2.0, -2.0])
+    caps_only = dt.EnvelopeTensors.from_values(max_effort=caps)
+    np.testing.assert_array_equal(dt.clamp_effort(caps_only, -5.0, 1.0), [-1.0, -2.0, -3.0])
 
 
 def test_actuator_applies_pd_law_and_envelope(device: str) -> None:
@@ -191,7 +203,9 @@ def test_bad_input_raises_input_error() -> None:
     with pytest.raises(InputError, match="2 values for 3 joints"):
         dt.EnvelopeActuator(cfg, num_envs=1, num_joints=3)
     with pytest.raises(InputError, match="dt"):
-        dt.clamp_effort_implicit(1.0, 0.0, 1.0, -0.01, 1.0)
+        dt.clamp_effort_implicit(dt.EnvelopeTensors.from_values(max_effort=1.0), 1.0, 0.0, 1.0, -0.01)
+    with pytest.raises(InputError, match="params"):
+        dt.clamp_effort(1.0, 0.0, 1.0)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="dtype"):
         dt.clamp_drive_impulse(0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, dtype=np.int32)
 
@@ -201,3 +215,40 @@ def test_import_is_light() -> None:
     code = "import sys, drive_envelope.torch\nprint('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_envelope_tensors_build_and_validate() -> None:
+    """Build EnvelopeTensors from envelopes or values (units read once), and reject bad values."""
+    import torch
+
+    import drive_envelope.torch as dt
+
+    env = de.PerformanceEnvelope(max_effort=3.0, max_actuator_velocity=4.0)
+    one = dt.EnvelopeTensors.from_envelopes(env)
+    assert one.shape == () and one.dtype == torch.float32
+    assert dt.EnvelopeTensors.from_envelopes(env, count=5).shape == (5,)
+    listed = dt.EnvelopeTensors.from_envelopes(
+        [env, de.PerformanceEnvelope(max_effort=1.0)], dtype=torch.float64
+    )
+    assert listed.max_effort.tolist() == [3.0, 1.0] and listed.max_actuator_velocity[1] == np.inf
+    grid = dt.EnvelopeTensors.from_values(
+        max_effort=[[1.0, 2.0, 3.0]],
+        max_actuator_velocity="60 rpm",
+        speed_effort_gradient=["0.5 rad/s/(N*m)", 0.5, 1],
+    )
+    assert grid.shape == (1, 3)
+    assert float(grid.max_actuator_velocity) == pytest.approx(2.0 * np.pi)
+    assert dt.effort_limit(grid, torch.zeros(4, 3)).shape == (4, 3)
+    with pytest.raises(InputError, match="max_effort"):
+        dt.EnvelopeTensors.from_values(max_effort=[1.0, -1.0])
+    with pytest.raises(InputError, match="angle"):
+        dt.EnvelopeTensors.from_values(max_effort=1.0, max_actuator_velocity="5 Hz")
+    with pytest.raises(InputError, match="broadcast"):
+        dt.EnvelopeTensors.from_values(max_effort=[1.0, 2.0], speed_effort_gradient=[0.1, 0.2, 0.3])
+    with pytest.raises(InputError, match="one dtype"):
+        dt.EnvelopeTensors(
+            max_effort=torch.zeros(2),
+            max_actuator_velocity=torch.zeros(2, dtype=torch.float64),
+            velocity_dependent_resistance=torch.zeros(2),
+            speed_effort_gradient=torch.zeros(2),
+        )

@@ -58,8 +58,9 @@ def test_clamp_drive_impulse_matches_float32_reference(device: str, vectors: str
     import drive_envelope.warp as dw
 
     args = random_impulse_args() if vectors == "random" else edge_impulse_args()
-    result = dw.clamp_drive_impulse(*_upload(args, device)).numpy()
-    assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32))
+    for exact in (False, True):
+        result = dw.clamp_drive_impulse(*_upload(args, device), physx_exact=exact).numpy()
+        assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32, physx_exact=exact))
 
 
 def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
@@ -70,7 +71,11 @@ def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
     if golden is None:
         pytest.skip("tests/golden/physx_clamp_drive_impulse.npz not present")
     args, expected = golden
-    assert _same(dw.clamp_drive_impulse(*_upload(args, device)).numpy(), expected)
+    exact = dw.clamp_drive_impulse(*_upload(args, device), physx_exact=True).numpy()
+    assert _same(exact, expected)
+    assert np.array_equal(exact.view(np.uint32), expected.view(np.uint32))  # zeros' signs, NaN bits
+    guarded = dw.clamp_drive_impulse(*_upload(args, device)).numpy()
+    assert _same(guarded, de.clamp_drive_impulse(*args, dtype=np.float32))
 
 
 def test_clamp_drive_impulse_accepts_numpy_and_scalars() -> None:
@@ -145,8 +150,8 @@ def test_funcs_work_inside_user_kernels() -> None:
         out: wp.array(dtype=wp.float32, ndim=2),
     ):
         i = wp.tid()
-        out[i, 0] = clamp_effort_func(tau[i], qd[i], 2.0, 3.0, 0.1, 0.5)
-        out[i, 1] = clamp_effort_implicit_func(tau[i], qd[i], 50.0, 0.0, 0.01, 2.0, 3.0, 0.1, 0.5)
+        out[i, 0] = clamp_effort_func(2.0, 3.0, 0.1, 0.5, tau[i], qd[i])
+        out[i, 1] = clamp_effort_implicit_func(2.0, 3.0, 0.1, 0.5, tau[i], qd[i], 50.0, 0.01, 0.0)
 
     tau = np.linspace(-5.0, 5.0, 101, dtype=np.float32)
     qd = np.linspace(4.0, -4.0, 101, dtype=np.float32)
@@ -170,7 +175,7 @@ def test_out_buffer_is_reused() -> None:
 
     import drive_envelope.warp as dw
 
-    params = dw.EnvelopeArrays.from_numpy(max_effort=[1.0, 2.0, 3.0])
+    params = dw.EnvelopeArrays.from_values(max_effort=[1.0, 2.0, 3.0])
     effort = wp.array([5.0, -5.0, 0.5], dtype=wp.float32, device=params.device)
     result = dw.clamp_effort(params, effort, 0.0, out=effort)
     assert result is effort
@@ -187,15 +192,15 @@ def test_bad_input_raises_input_error() -> None:
         dw.clamp_drive_impulse(0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, dtype=np.float64)
     with pytest.raises(InputError, match="broadcast"):
         dw.clamp_drive_impulse(np.zeros(3), np.zeros(4), 1.0, 1.0, 1.0, 1.0, 0.0, 0.0)
-    params = dw.EnvelopeArrays.from_numpy(max_effort=1.0, count=4)
+    params = dw.EnvelopeArrays.from_values(max_effort=1.0, count=4)
     with pytest.raises(InputError, match="dt"):
         dw.clamp_effort_implicit(params, 1.0, 0.0, 1.0, 0.0)
     with pytest.raises(InputError, match="velocity"):
         dw.clamp_effort(params, 1.0, wp.zeros(5, dtype=wp.float32, device=params.device))
     with pytest.raises(InputError, match="speed_effort_gradient"):
-        dw.EnvelopeArrays.from_numpy(max_effort=1.0, speed_effort_gradient=[0.0, -1.0])
+        dw.EnvelopeArrays.from_values(max_effort=1.0, speed_effort_gradient=[0.0, -1.0])
     with pytest.raises(InputError, match="max_effort"):
-        dw.EnvelopeArrays.from_numpy(max_effort=np.inf, count=2)
+        dw.EnvelopeArrays.from_values(max_effort=np.inf, count=2)
     with pytest.raises(InputError, match="shapes differ"):
         dw.EnvelopeArrays(
             max_effort=wp.zeros(2, dtype=wp.float32),

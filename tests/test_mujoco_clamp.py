@@ -1,8 +1,9 @@
 """The plugin's C++ drive math against the Python core, through the library's C entry points.
 
-``drive_envelope_clamp_drive_impulse_f32`` must reproduce the Python float32 mode (and PhysX, the
-golden file) bit for bit; the float64 variant must equal the Python float64 mode; the implicit drive
-must equal ``implicit_drive_effort``. Vectors: ``golden/physx_clamp_drive_impulse.npz`` (PhysX's
+``drive_envelope_clamp_drive_impulse_physx_f32`` (``ClampDriveImpulsePhysx``) must reproduce PhysX
+(the golden file) bit for bit; the guarded ``_f32``/``_f64`` entry points (``ClampDriveImpulse``, what
+the plugin runs) and the exact ones must equal the Python modes; the implicit drive must equal
+``implicit_drive_effort``. Vectors: ``golden/physx_clamp_drive_impulse.npz`` (PhysX's
 own outputs, see ``golden/ATTRIBUTION.md``) plus random and edge vectors drawn here.
 """
 
@@ -18,6 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _kernel_vectors import cpp_clamp, cpp_clamp_library
 from drive_envelope import clamp_drive_impulse, implicit_drive_effort
 
 pytestmark = pytest.mark.mujoco
@@ -27,29 +29,15 @@ GOLDEN = Path(__file__).parent / "golden" / "physx_clamp_drive_impulse.npz"
 
 @pytest.fixture(scope="module")
 def lib() -> ctypes.CDLL:
-    pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
-    handle = loader.plugin_library()
-    for name, kind in (("f32", ctypes.c_float), ("f64", ctypes.c_double)):
-        function = getattr(handle, f"drive_envelope_clamp_drive_impulse_{name}")
-        function.argtypes = [kind] * 8
-        function.restype = kind
+    handle = cpp_clamp_library()
     effort = handle.drive_envelope_implicit_drive_effort
     effort.argtypes = [ctypes.c_double] * 7 + [ctypes.c_int]
     effort.restype = ctypes.c_double
-    return handle
+    return handle  # type: ignore[no-any-return]
 
 
-def _cpp(lib: ctypes.CDLL, rows: npt.NDArray[Any], name: str) -> npt.NDArray[Any]:
-    function = getattr(lib, f"drive_envelope_clamp_drive_impulse_{name}")
-    dtype = np.float32 if name == "f32" else np.float64
-    return np.array([function(*map(float, row)) for row in rows], dtype=dtype)
+def _cpp(lib: ctypes.CDLL, rows: npt.NDArray[Any], name: str, physx_exact: bool = False) -> npt.NDArray[Any]:
+    return cpp_clamp(lib, rows, np.float32 if name == "f32" else np.float64, physx_exact)  # type: ignore[no-any-return]
 
 
 def _bits_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.bool_]:
@@ -85,36 +73,48 @@ def test_float32_matches_physx_golden_bit_for_bit(lib: ctypes.CDLL) -> None:
         pytest.skip(f"{GOLDEN.name} not present")
     golden = np.load(GOLDEN)
     inputs, expected = golden["inputs"], golden["expected"]
-    result = _cpp(lib, inputs, "f32")
+    result = _cpp(lib, inputs, "f32", physx_exact=True)
     mismatch = ~_bits_equal(result, expected)
     assert not mismatch.any(), f"{mismatch.sum()} rows differ, first: {inputs[mismatch][:3]}"
+    assert np.array_equal(result.view(np.uint32), expected.view(np.uint32))  # zeros' signs, NaN bits
+    # the guarded default (what the plugin runs) equals the Python default on the same rows
+    for name, dtype in (("f32", np.float32), ("f64", np.float64)):
+        guarded = _cpp(lib, inputs, name)
+        assert _bits_equal(guarded, clamp_drive_impulse(*inputs.T, dtype=dtype)).all()
+        exact = _cpp(lib, inputs, name, physx_exact=True)
+        assert _bits_equal(exact, clamp_drive_impulse(*inputs.T, dtype=dtype, physx_exact=True)).all()
 
 
 def test_float32_matches_python_float32_mode(lib: ctypes.CDLL) -> None:
     """Match the Python float32 clamp exactly on random and edge vectors."""
     rows = _random_rows(4000, seed=1).astype(np.float32)
-    python = clamp_drive_impulse(*rows.T, dtype=np.float32)
-    cpp = _cpp(lib, rows, "f32")
-    assert _bits_equal(cpp, python).all()
+    for exact in (False, True):
+        python = clamp_drive_impulse(*rows.T, dtype=np.float32, physx_exact=exact)
+        cpp = _cpp(lib, rows, "f32", physx_exact=exact)
+        assert _bits_equal(cpp, python).all()
 
 
 def test_float64_matches_python_float64_mode(lib: ctypes.CDLL) -> None:
     """Match the Python float64 clamp exactly on random and edge vectors."""
     rows = _random_rows(4000, seed=2)
-    python = clamp_drive_impulse(*rows.T)
-    cpp = _cpp(lib, rows, "f64")
-    assert _bits_equal(cpp, python).all()
+    for exact in (False, True):
+        python = clamp_drive_impulse(*rows.T, physx_exact=exact)
+        cpp = _cpp(lib, rows, "f64", physx_exact=exact)
+        assert _bits_equal(cpp, python).all()
 
 
 @settings(max_examples=300, deadline=None)
 @given(
     st.lists(st.floats(allow_nan=True, allow_infinity=True, width=32), min_size=8, max_size=8),
+    st.booleans(),
 )
-def test_float32_matches_python_on_arbitrary_floats(lib: ctypes.CDLL, values: list[float]) -> None:
+def test_float32_matches_python_on_arbitrary_floats(
+    lib: ctypes.CDLL, values: list[float], exact: bool
+) -> None:
     """Agree with the Python float32 clamp on any eight float32 inputs, NaN and inf included."""
     row = np.asarray(values, dtype=np.float32)
-    python = clamp_drive_impulse(*row, dtype=np.float32)
-    cpp = _cpp(lib, row[None, :], "f32")
+    python = clamp_drive_impulse(*row, dtype=np.float32, physx_exact=exact)
+    cpp = _cpp(lib, row[None, :], "f32", physx_exact=exact)
     assert _bits_equal(cpp, np.atleast_1d(python)).all()
 
 

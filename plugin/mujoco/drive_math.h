@@ -3,15 +3,17 @@
 // The PhysX drive of one DOF, header-only and free of MuJoCo types: the implicit PD impulse and
 // the performance-envelope clamp. These are C++ ports of the Python core
 // (drive_envelope.implicit_drive_effort, drive_envelope.clamp_drive_impulse), which in turn follow
-// PhysX 5.6+ (computeImplicitDriveParams, Dy::clampDriveImpulse). The float instantiation of
-// ClampDriveImpulse reproduces the Python float32 mode bit for bit (same operations, same order);
-// build with -ffp-contract=off so that the compiler does not fuse them.
+// PhysX 5.6+ (computeImplicitDriveParams, Dy::clampDriveImpulse). ClampDriveImpulse is the guarded
+// default (the effort cap kept), ClampDriveImpulsePhysx PhysX's arithmetic (physx_exact=True); their
+// float instantiations reproduce the Python float32 modes bit for bit (same operations, same
+// order); build with -ffp-contract=off so that the compiler does not fuse them.
 
 #ifndef DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_
 #define DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_
 
 #include <cfloat>
 #include <cmath>
+#include <limits>
 
 namespace drive_envelope::mujoco_plugin {
 
@@ -32,16 +34,26 @@ inline T PxMax(T a, T b) { return a > b ? a : b; }
 template <typename T>
 inline T PxMin(T a, T b) { return a < b ? a : b; }
 
+// numpy.maximum / numpy.minimum: a NaN in either operand wins (the guarded clamp's selects)
+template <typename T>
+inline T MaxNaN(T a, T b) { return (a > b || std::isnan(a)) ? a : b; }
+
+template <typename T>
+inline T MinNaN(T a, T b) { return (a < b || std::isnan(a)) ? a : b; }
+
 template <typename T>
 struct Bounds {
   T lower;
   T upper;
 };
 
-// feasible [lower, upper] of a positive request against |v| <= max - k*|x|
-template <typename T>
+// feasible [lower, upper] of a positive request against |v| <= max - k*|x|; kExact: PhysX's
+// arithmetic (FLT_MAX sentinels, select semantics), else the guard: inf sentinels, NaN-carrying
+// selects, and a NaN lower bound when a flat curve says no (the clamp then returns 0)
+template <typename T, bool kExact>
 inline Bounds<T> BoundsPositive(T dev, T max, T denom1, T denom2, T impulse) {
-  const T eps = static_cast<T>(kPxEps), big = static_cast<T>(kPxMax), zero = 0;
+  const T eps = static_cast<T>(kPxEps), zero = 0;
+  const T big = kExact ? static_cast<T>(kPxMax) : std::numeric_limits<T>::infinity();
 
   // the curve is ignored
   if (std::fabs(denom2) < eps) return {-big, big};
@@ -49,71 +61,116 @@ inline Bounds<T> BoundsPositive(T dev, T max, T denom1, T denom2, T impulse) {
   // denom1 ~ 0: the lower curve is a yes/no test on (dev - max)
   if (std::fabs(denom1) < eps) {
     T bound2 = (dev + max) / denom2;
+    if (!kExact) {
+      bool yes = std::fabs(dev - max) < eps || (dev - max) <= zero;
+      return {yes ? zero : std::numeric_limits<T>::quiet_NaN(), bound2};
+    }
     T bound1 = std::fabs(dev - max) < eps ? -big : ((dev - max) > zero ? big : -big);
     return {PxMax(zero, bound1), bound2};
   }
   T bound1 = (dev - max) / denom1;
   T bound2 = (dev + max) / denom2;
-  if (denom1 >= zero) return {PxMax(zero, bound1), PxMin(bound2, impulse)};
-  return {zero, PxMin(PxMin(bound1, bound2), impulse)};
+  if (kExact) {
+    if (denom1 >= zero) return {PxMax(zero, bound1), PxMin(bound2, impulse)};
+    return {zero, PxMin(PxMin(bound1, bound2), impulse)};
+  }
+  if (denom1 >= zero) return {MaxNaN(zero, bound1), MinNaN(bound2, impulse)};
+  return {zero, MinNaN(MinNaN(bound1, bound2), impulse)};
 }
 
 // feasible [lower, upper] of a negative (or zero) request
-template <typename T>
+template <typename T, bool kExact>
 inline Bounds<T> BoundsNegative(T dev, T max, T denom1, T denom2, T impulse) {
-  const T eps = static_cast<T>(kPxEps), big = static_cast<T>(kPxMax), zero = 0;
+  const T eps = static_cast<T>(kPxEps), zero = 0;
+  const T big = kExact ? static_cast<T>(kPxMax) : std::numeric_limits<T>::infinity();
   if (std::fabs(denom1) < eps) return {-big, big};
   if (std::fabs(denom2) < eps) {
     T bound1 = (dev - max) / denom1;
+    if (!kExact) {
+      bool yes = std::fabs(dev + max) < eps || (dev + max) >= zero;
+      return {bound1, yes ? zero : std::numeric_limits<T>::quiet_NaN()};
+    }
     T bound2 = std::fabs(dev + max) < eps ? big : ((dev + max) > zero ? big : -big);
     return {bound1, PxMin(zero, bound2)};
   }
   T bound1 = (dev - max) / denom1;
   T bound2 = (dev + max) / denom2;
-  if (denom2 >= zero) return {PxMax(bound1, impulse), PxMin(zero, bound2)};
-  return {PxMax(PxMax(bound1, bound2), impulse), zero};
+  if (kExact) {
+    if (denom2 >= zero) return {PxMax(bound1, impulse), PxMin(zero, bound2)};
+    return {PxMax(PxMax(bound1, bound2), impulse), zero};
+  }
+  if (denom2 >= zero) return {MaxNaN(bound1, impulse), MinNaN(zero, bound2)};
+  return {MaxNaN(MaxNaN(bound1, bound2), impulse), zero};
+}
+
+template <typename T, bool kExact>
+inline Bounds<T> CurveBounds(T dev, T max, T response, T slope, T impulse) {
+  if (impulse > T(0)) {
+    return BoundsPositive<T, kExact>(dev, max, response - slope, response + slope, impulse);
+  }
+  return BoundsNegative<T, kExact>(dev, max, response + slope, response - slope, impulse);
+}
+
+template <typename T, bool kExact>
+inline T ClampDriveImpulseImpl(T joint_vel0, T drive_impulse0, T drive_impulse, T response,
+                               T max_joint_vel, T max_impulse, T speed_impulse_gradient,
+                               T velocity_dependent_resistance) {
+  const T zero = 0, one = 1;
+  T dev = drive_impulse0 * response - joint_vel0;
+  T resist = velocity_dependent_resistance;
+  Bounds<T> b1 = CurveBounds<T, kExact>(dev, max_joint_vel, response, speed_impulse_gradient,
+                                        drive_impulse);
+
+  // eq. 1 written as |v| <= max_impulse/R - (1/R)*|x|; R = 0 is the box |x| <= max_impulse
+  Bounds<T> b2 = {-max_impulse, max_impulse};
+  bool plain = resist == zero;
+  T inv = plain ? one : one / resist, limit = plain ? max_impulse : max_impulse / resist;
+
+  // guarded: a resistance whose 1/R or max_impulse/R overflows acts as R = 0 (its R -> 0 limit)
+  if (!kExact) plain = plain || !(std::isfinite(inv) && std::isfinite(limit));
+  if (!plain) b2 = CurveBounds<T, kExact>(dev, limit, response, inv, drive_impulse);
+  if (kExact) {
+    T lower = PxMax(b1.lower, b2.lower);
+    T upper = PxMin(b1.upper, b2.upper);
+
+    // empty interval: even zero effort is infeasible, the drive lets go
+    if (lower > upper) return zero;
+    return PxMin(upper, PxMax(lower, drive_impulse));
+  }
+
+  // |x| <= max_impulse bounds the interval (implied by eq. 1, kept through rounding)
+  T lower = MaxNaN(MaxNaN(b1.lower, b2.lower), -max_impulse);
+  T upper = MinNaN(MinNaN(b1.upper, b2.upper), max_impulse);
+  T clamped = MinNaN(upper, MaxNaN(lower, drive_impulse));
+
+  // empty, or a NaN bound or request: the drive lets go
+  if (!(lower <= upper) || std::isnan(clamped)) return zero;
+  return clamped;
 }
 
 // clamp a requested total drive impulse x so that x and v(x) = v0 + r*(x - x0) satisfy
 //   |v(x)| <= max_joint_vel - speed_impulse_gradient*|x|
 //   |x|    <= max_impulse - velocity_dependent_resistance*|v(x)|   (|x| <= max_impulse if 0)
-// keeps the sign of the request, never grows it, and returns 0 when no such x exists
+// keeps the sign of the request, never grows it, and returns 0 when no such x exists. this is
+// the guarded clamp of drive_envelope.clamp_drive_impulse: |result| <= max_impulse and no NaN for
+// every finite input (a resistance whose 1/R overflows acts as R = 0)
 template <typename T>
 inline T ClampDriveImpulse(T joint_vel0, T drive_impulse0, T drive_impulse, T response,
                            T max_joint_vel, T max_impulse, T speed_impulse_gradient,
                            T velocity_dependent_resistance) {
-  const T zero = 0, one = 1;
-  T dev = drive_impulse0 * response - joint_vel0;
-  T resist = velocity_dependent_resistance;
-  Bounds<T> b1, b2;
-  if (drive_impulse > zero) {
-    b1 = BoundsPositive(dev, max_joint_vel, response - speed_impulse_gradient,
-                        response + speed_impulse_gradient, drive_impulse);
-    if (resist == zero) {
-      b2 = {-max_impulse, max_impulse};
-    } else {
-      // eq. 1 written as |v| <= max_impulse/R - (1/R)*|x|
-      T inv = one / resist;
-      b2 = BoundsPositive(dev, max_impulse / resist, response - inv, response + inv,
-                          drive_impulse);
-    }
-  } else {
-    b1 = BoundsNegative(dev, max_joint_vel, response + speed_impulse_gradient,
-                        response - speed_impulse_gradient, drive_impulse);
-    if (resist == zero) {
-      b2 = {-max_impulse, max_impulse};
-    } else {
-      T inv = one / resist;
-      b2 = BoundsNegative(dev, max_impulse / resist, response + inv, response - inv,
-                          drive_impulse);
-    }
-  }
-  T lower = PxMax(b1.lower, b2.lower);
-  T upper = PxMin(b1.upper, b2.upper);
+  return ClampDriveImpulseImpl<T, false>(joint_vel0, drive_impulse0, drive_impulse, response,
+                                         max_joint_vel, max_impulse, speed_impulse_gradient,
+                                         velocity_dependent_resistance);
+}
 
-  // empty interval: even zero effort is infeasible, the drive lets go
-  if (lower > upper) return zero;
-  return PxMin(upper, PxMax(lower, drive_impulse));
+// PhysX's Dy::clampDriveImpulse bit for bit (physx_exact=True in Python), flaws included
+template <typename T>
+inline T ClampDriveImpulsePhysx(T joint_vel0, T drive_impulse0, T drive_impulse, T response,
+                                T max_joint_vel, T max_impulse, T speed_impulse_gradient,
+                                T velocity_dependent_resistance) {
+  return ClampDriveImpulseImpl<T, true>(joint_vel0, drive_impulse0, drive_impulse, response,
+                                        max_joint_vel, max_impulse, speed_impulse_gradient,
+                                        velocity_dependent_resistance);
 }
 
 // unclamped effort of one step of PhysX's implicit PD drive (spring and damper both implicit):

@@ -1,7 +1,8 @@
 // Copyright 2026 The drive-envelope authors. BSD-3-Clause.
 //
-// C entry points for tests and tools (ctypes): the C++ drive math on plain numbers, and the MuJoCo
-// version the library was built against.
+// C entry points for tests and tools (ctypes): the C++ drive math on plain numbers (the clamp in
+// its guarded default and in PhysX's exact arithmetic), and the MuJoCo version the library was
+// built against.
 
 #include <mujoco/mujoco.h>
 
@@ -31,6 +32,24 @@ __attribute__((visibility("default"))) double drive_envelope_clamp_drive_impulse
   return dm::ClampDriveImpulse<double>(joint_vel0, drive_impulse0, drive_impulse, response,
                                        max_joint_vel, max_impulse, speed_impulse_gradient,
                                        velocity_dependent_resistance);
+}
+
+__attribute__((visibility("default"))) float drive_envelope_clamp_drive_impulse_physx_f32(
+    float joint_vel0, float drive_impulse0, float drive_impulse, float response,
+    float max_joint_vel, float max_impulse, float speed_impulse_gradient,
+    float velocity_dependent_resistance) {
+  return dm::ClampDriveImpulsePhysx<float>(joint_vel0, drive_impulse0, drive_impulse, response,
+                                           max_joint_vel, max_impulse, speed_impulse_gradient,
+                                           velocity_dependent_resistance);
+}
+
+__attribute__((visibility("default"))) double drive_envelope_clamp_drive_impulse_physx_f64(
+    double joint_vel0, double drive_impulse0, double drive_impulse, double response,
+    double max_joint_vel, double max_impulse, double speed_impulse_gradient,
+    double velocity_dependent_resistance) {
+  return dm::ClampDriveImpulsePhysx<double>(joint_vel0, drive_impulse0, drive_impulse, response,
+                                            max_joint_vel, max_impulse, speed_impulse_gradient,
+                                            velocity_dependent_resistance);
 }
 
 // drive_type: 0 force, 1 acceleration

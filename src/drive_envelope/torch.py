@@ -1,11 +1,23 @@
 """The envelope on PyTorch tensors (extra ``torch``): batched ops and an Isaac Lab style actuator.
 
 Device-agnostic (CPU or CUDA tensors), no Python loops over DOFs; importing this module does not
-import torch (each function does). ``clamp_drive_impulse`` has the core's signature (PhysX argument
-order) and reproduces PhysX's float32 numbers on float32 tensors; NumPy arrays and scalars are
-accepted too, and ``.numpy()`` reads the result back on the CPU. Eager PyTorch runs that port as
-about a hundred elementwise operations; ``fused_clamp_drive_impulse`` (same signature, same numbers)
-fuses them with ``torch.compile`` for RL-scale loops (the first call compiles, about a minute).
+import torch (each function does). ``EnvelopeTensors`` holds the four envelope parameters as
+tensors of any shapes that broadcast (e.g. ``(num_envs, num_joints)``); ``effort_limit(params,
+velocity)``, ``clamp_effort(params, effort, velocity)`` and ``clamp_effort_implicit(params,
+requested_effort, velocity, response, dt, applied_effort=0.0)`` take it first, with Warp's names.
+``clamp_drive_impulse`` has the core's signature (PhysX argument order, ``physx_exact=True``
+reproduces PhysX's float32 numbers on float32 tensors, the default keeps the effort cap); NumPy
+arrays and scalars are accepted too, and ``.numpy()`` reads the result back on the CPU. Eager
+PyTorch runs that port as about a hundred elementwise operations; ``fused_clamp_drive_impulse``
+(same signature, same numbers) fuses them with ``torch.compile`` for RL-scale loops (the first call
+compiles, about a minute). Example::
+
+    from drive_envelope import PerformanceEnvelope
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort_implicit
+
+    params = EnvelopeTensors.from_values(max_effort=[12.0, 8.0], max_actuator_velocity="300 rpm",
+                                         speed_effort_gradient=0.5, device="cuda:0")
+    effort = clamp_effort_implicit(params, requested, qd, response, dt=0.005)   # (num_envs, 2)
 
 ``EnvelopeActuator`` has the shape of Isaac Lab's explicit actuators: ``compute(targets, joint_pos,
 joint_vel) -> efforts``, a PD law clipped by the envelope. Example::
@@ -21,6 +33,7 @@ joint_vel) -> efforts``, a PD law clipped by the envelope. Example::
 from __future__ import annotations
 
 from drive_envelope._src.adapters.isaaclab.actuator import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
+from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 from drive_envelope._src.kernels.torch_ops import (
     clamp_drive_impulse,
     clamp_effort,
@@ -32,6 +45,7 @@ from drive_envelope._src.kernels.torch_ops import (
 __all__ = [
     "EnvelopeActuator",
     "EnvelopeActuatorCfg",
+    "EnvelopeTensors",
     "JointTargets",
     "clamp_drive_impulse",
     "clamp_effort",

@@ -1,21 +1,24 @@
 """The envelope on NVIDIA Warp (extra ``warp``): ``@wp.func`` building blocks and batched launches.
 
-float32 throughout, like the engines, with PhysX's float rules (absolute epsilon ``2^-23``,
-``FLT_MAX`` sentinels, ``PxMax``/``PxMin`` select semantics for NaN). Importing this module does not
-import Warp; the first use of any name does.
+float32 launches, like the engines, with PhysX's float rules (absolute epsilon ``2^-23`` on the
+denominators, ``FLT_MAX`` sentinels and ``PxMax``/``PxMin`` select semantics where PhysX's
+arithmetic is asked for). Importing this module does not import Warp; the first use of a
+building block or a launch does.
 
-Building blocks to call inside your own ``@wp.kernel`` (all arguments ``wp.float32``, SI):
+Building blocks to call inside your own ``@wp.kernel``: generic (``wp.float32`` or ``wp.float64``,
+one type per call), SI, the four envelope parameters first as everywhere in the library:
 
-* ``effort_limit_func(velocity, max_effort, max_actuator_velocity, velocity_dependent_resistance,
-  speed_effort_gradient)`` -> largest |effort| [N*m or N] at that velocity;
-* ``clamp_effort_func(effort, velocity, <the four parameters>)`` -> explicit clamp [N*m or N];
-* ``clamp_drive_impulse_func(<PhysX clampDriveImpulse arguments>)`` -> clamped impulse [N*m*s or N*s];
-* ``clamp_effort_implicit_func(requested_effort, velocity, response, applied_effort, dt,
-  <the four parameters>)`` -> implicit clamp in effort units [N*m or N].
+* ``effort_limit_func(max_effort, max_actuator_velocity, velocity_dependent_resistance,
+  speed_effort_gradient, velocity)`` -> largest |effort| [N*m or N] at that velocity;
+* ``clamp_effort_func(<the four parameters>, effort, velocity)`` -> explicit clamp [N*m or N];
+* ``clamp_effort_implicit_func(<the four parameters>, requested_effort, velocity, response, dt,
+  applied_effort)`` -> implicit clamp in effort units [N*m or N], the effort cap kept;
+* ``clamp_drive_impulse_func(<PhysX clampDriveImpulse arguments>, physx_exact=False)`` -> clamped
+  impulse [N*m*s or N*s].
 
 Launch wrappers over struct-of-arrays buffers: :class:`EnvelopeArrays` (per-DOF parameters, shape
-``(N,)``), :func:`effort_limit`, :func:`clamp_effort`, :func:`clamp_effort_implicit`, and
-:func:`clamp_drive_impulse` with the core's signature. Example::
+``(N,)``), :func:`effort_limit`, :func:`clamp_effort`, :func:`clamp_effort_implicit` (each takes the
+parameters first), and :func:`clamp_drive_impulse` with the core's signature. Example::
 
     import warp as wp
     from drive_envelope import PerformanceEnvelope
@@ -28,7 +31,7 @@ Launch wrappers over struct-of-arrays buffers: :class:`EnvelopeArrays` (per-DOF 
     @wp.kernel
     def my_kernel(tau: wp.array(dtype=float), qd: wp.array(dtype=float)):
         i = wp.tid()
-        tau[i] = clamp_effort_func(tau[i], qd[i], 12.0, 8.0, 0.0, 0.5)
+        tau[i] = clamp_effort_func(12.0, 8.0, 0.0, 0.5, tau[i], qd[i])
 """
 
 from __future__ import annotations
@@ -55,7 +58,7 @@ __all__ = [
     "effort_limit_func",
 ]
 
-# Created by __getattr__ on first access (annotation only: the module stays free of Warp until then)
+# Loaded by __getattr__ on first access (annotation only: the module stays free of Warp until then)
 clamp_drive_impulse_func: Any
 clamp_effort_func: Any
 clamp_effort_implicit_func: Any
@@ -65,12 +68,11 @@ _FUNCS = ("clamp_drive_impulse_func", "clamp_effort_func", "clamp_effort_implici
 
 
 def __getattr__(name: str) -> Any:
-    """Create the ``@wp.func`` building blocks on first access (this imports Warp)."""
+    """Load the ``@wp.func`` building blocks on first access (this imports Warp)."""
     if name in _FUNCS:
-        from drive_envelope._src.kernels.warp_funcs import build
-
         try:
-            return getattr(build(), name)
+            from drive_envelope._src.kernels import warp_funcs
         except ModuleNotFoundError as exc:
             raise ImportError(f"{name} needs Warp: pip install 'drive-envelope[warp]'") from exc
+        return getattr(warp_funcs, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,11 +1,17 @@
 """The envelope on PyTorch tensors: batched, device-agnostic, no Python loops over DOFs.
 
-Every function imports ``torch`` on call. Inputs are tensors, NumPy arrays or scalars; they
-broadcast together and land on the device of the first tensor given (the CPU when there is none).
+Every function imports ``torch`` on call. The effort-level ops take an :class:`EnvelopeTensors`
+first and compute in its dtype on its device; states may be tensors, NumPy arrays or scalars that
+broadcast with it (e.g. ``(num_envs, num_joints)``). :func:`clamp_drive_impulse` has the core's
+signature; its inputs land on the device of the first tensor given (the CPU when there is none).
 
-:func:`clamp_drive_impulse` is the PhysX ``clampDriveImpulse`` port, select for select like the
-NumPy reference (``PxMax(a, b) = a > b ? a : b``, absolute epsilon ``2^-23``, ``FLT_MAX``
-sentinels), so float32 tensors give PhysX's float32 numbers.
+:func:`clamp_drive_impulse` is the same port as the NumPy core (``envelope/clamp.py``): PhysX's
+two request signs evaluated through the positive branch on sign-normalized inputs, with the same
+two modes. ``physx_exact=True`` follows PhysX select for select (``PxMax(a, b) = a > b ? a : b``,
+absolute epsilon ``2^-23``, ``FLT_MAX`` sentinels), so float32 tensors give PhysX's float32
+numbers; the default keeps ``|result| <= max_impulse`` and never returns NaN. Unlike NumPy it has no
+data-dependent branches (every patch is a ``torch.where``), so it runs without host syncs on CUDA
+and ``torch.compile`` fuses it whole (:func:`fused_clamp_drive_impulse`).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import numpy as np
 
 from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors, resolve_dtype
 
 if TYPE_CHECKING:
     import torch
@@ -29,38 +36,7 @@ __all__ = [
     "clamp_effort_implicit",
     "effort_limit",
     "fused_clamp_drive_impulse",
-    "resolve_dtype",
 ]
-
-
-def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
-    """The torch float dtype to compute in: ``dtype``, else that of the first float tensor, else float32.
-
-    Args:
-        dtype: ``None``, a torch float dtype, or a NumPy float dtype (``numpy.float32``/``float64``).
-        values: The arguments, searched for a floating tensor when ``dtype`` is None.
-    """
-    import torch
-
-    if dtype is None:
-        for value in values:
-            if isinstance(value, torch.Tensor) and value.is_floating_point():
-                return value.dtype
-        return torch.float32
-    if isinstance(dtype, torch.dtype):
-        if not dtype.is_floating_point:
-            raise InputError(f"dtype: expected a float dtype, got {dtype}")
-        return dtype
-    try:
-        name = np.dtype(dtype).name
-    except TypeError:
-        raise InputError(
-            f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}"
-        ) from None
-    mapping = {"float16": torch.float16, "float32": torch.float32, "float64": torch.float64}
-    if name not in mapping:
-        raise InputError(f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}")
-    return mapping[name]
 
 
 def _device(values: tuple[object, ...]) -> torch.device:
@@ -81,7 +57,20 @@ def _tensors(values: tuple[object, ...], dtype: Any) -> list[torch.Tensor]:
     return [torch.as_tensor(v, dtype=kind, device=device) for v in values]
 
 
-def _pmax(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+def _params(params: object) -> EnvelopeTensors:
+    if not isinstance(params, EnvelopeTensors):
+        raise InputError(f"params: expected an EnvelopeTensors, got {type(params).__name__}")
+    return params
+
+
+def _states(params: EnvelopeTensors, *values: object) -> list[torch.Tensor]:
+    """The states in the parameters' dtype and on their device."""
+    import torch
+
+    return [torch.as_tensor(v, dtype=params.dtype, device=params.device) for v in values]
+
+
+def _pmax(a: torch.Tensor | float, b: torch.Tensor) -> torch.Tensor:
     """``PxMax(float)`` = ``selectMax``: ``a > b ? a : b`` (a NaN in ``b`` survives)."""
     import torch
 
@@ -95,49 +84,115 @@ def _pmin(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     return torch.where(a < b, a, b)
 
 
-def _bounds_positive(
-    dev: torch.Tensor, max_v: torch.Tensor, denom1: torch.Tensor, denom2: torch.Tensor, impulse: torch.Tensor
+def _bounds(
+    num1: torch.Tensor,
+    num2: torch.Tensor,
+    denom1: torch.Tensor,
+    denom2: torch.Tensor,
+    request: torch.Tensor,
+    negative: torch.Tensor | None,
+    zero: torch.Tensor | float,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """``computeBoundsForPositiveImpulse``: feasible [lower, upper] for a positive request."""
+    """``computeBoundsForPositiveImpulse`` on sign-normalized inputs (see ``envelope/clamp.py``).
+
+    ``num1``, ``num2`` are the normalized numerators ``s*dev -+ limit``; ``negative`` (exact mode
+    only) marks PhysX's negative branch and ``zero`` is its literal 0 as mirrored (``-0.0`` there).
+    """
     import torch
 
-    big = torch.full_like(dev, PX_MAX_F32)
-    zero = torch.zeros_like(dev)
-    bound1 = (dev - max_v) / denom1
-    bound2 = (dev + max_v) / denom2
-    gap = dev - max_v
-    # denom1 ~ 0: the lower curve is a yes/no test on (dev - max_v)
-    flat_lower = torch.where(gap.abs() < PX_EPS_F32, -big, torch.where(gap > 0.0, big, -big))
+    bound1 = num1 / denom1
+    bound2 = num2 / denom2
     rising = denom1 >= 0.0
-    lower = torch.where(rising, _pmax(zero, bound1), zero)
-    upper = torch.where(rising, _pmin(bound2, impulse), _pmin(_pmin(bound1, bound2), impulse))
-    flat = denom1.abs() < PX_EPS_F32
-    lower = torch.where(flat, _pmax(zero, flat_lower), lower)
+    near = num1.abs() < PX_EPS_F32
+    if negative is not None:
+        lower = _pmax(zero, torch.where(rising, bound1, zero))  # PxMax(0, b1); falling: 0
+        # PhysX's negative branch takes PxMax(PxMax(bound1, bound2), x): mirrored, b2 comes first
+        first, second = torch.where(negative, bound2, bound1), torch.where(negative, bound1, bound2)
+        upper = _pmin(torch.where(rising, bound2, _pmin(first, second)), request)
+        # PhysX's negative branch answers no on a NaN gap, its positive one yes
+        no = ~near & torch.where(negative, ~(num1 < 0.0), num1 > 0.0)
+        flat_lower = torch.where(no, num1.new_tensor(PX_MAX_F32), zero)
+        big = num1.new_tensor(PX_MAX_F32)
+    else:
+        lower = torch.where(rising, bound1, 0.0)
+        upper = torch.where(rising, bound2, torch.minimum(bound1, bound2))
+        flat_lower = torch.where(near | (num1 <= 0.0), 0.0, num1.new_tensor(math.nan))  # NaN: says no
+        big = num1.new_tensor(math.inf)
+    flat = denom1.abs() < PX_EPS_F32  # the lower curve is a yes/no test on the gap num1
+    lower = torch.where(flat, flat_lower, lower)
     upper = torch.where(flat, bound2, upper)
-    ignored = denom2.abs() < PX_EPS_F32
+    ignored = denom2.abs() < PX_EPS_F32  # the curve is ignored
     return torch.where(ignored, -big, lower), torch.where(ignored, big, upper)
 
 
-def _bounds_negative(
-    dev: torch.Tensor, max_v: torch.Tensor, denom1: torch.Tensor, denom2: torch.Tensor, impulse: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """``computeBoundsForNegativeImpulse``: feasible [lower, upper] for a negative or zero request."""
+def _clamp_drive_impulse_tensors(
+    v0: torch.Tensor,
+    x0: torch.Tensor,
+    x: torch.Tensor,
+    r: torch.Tensor,
+    max_v: torch.Tensor,
+    max_x: torch.Tensor,
+    grad: torch.Tensor,
+    resist: torch.Tensor,
+    exact: bool = False,
+) -> torch.Tensor:
+    """The port proper, on tensors of one shape, dtype and device (what ``torch.compile`` fuses)."""
     import torch
 
-    big = torch.full_like(dev, PX_MAX_F32)
-    zero = torch.zeros_like(dev)
-    bound1 = (dev - max_v) / denom1
-    bound2 = (dev + max_v) / denom2
-    gap = dev + max_v
-    flat_upper = torch.where(gap.abs() < PX_EPS_F32, big, torch.where(gap > 0.0, big, -big))
-    rising = denom2 >= 0.0
-    lower = torch.where(rising, _pmax(bound1, impulse), _pmax(_pmax(bound1, bound2), impulse))
-    upper = torch.where(rising, _pmin(zero, bound2), zero)
-    flat = denom2.abs() < PX_EPS_F32
-    lower = torch.where(flat, bound1, lower)
-    upper = torch.where(flat, _pmin(zero, flat_upper), upper)
-    ignored = denom1.abs() < PX_EPS_F32
-    return torch.where(ignored, -big, lower), torch.where(ignored, big, upper)
+    dev = x0 * r - v0
+    if exact:
+        is_negative = ~(x > 0.0)
+        negative: torch.Tensor | None = is_negative
+        sign = torch.where(is_negative, -1.0, torch.ones_like(x))
+        zero: torch.Tensor | float = torch.where(is_negative, -0.0, torch.zeros_like(x))
+        request = x * sign
+
+        def numerators(limit: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+            # s*(dev -+ s*limit): the negated PhysX numerator, the sign of a zero included
+            signed = limit * sign
+            return (dev - signed) * sign, (dev + signed) * sign
+
+    else:  # a zero request may take either branch (both give 0); a NaN one gives 0 here
+        negative, zero = None, 0.0
+        sign = torch.copysign(torch.ones_like(x), x)
+        request = x.abs()
+        dev = dev * sign
+
+        def numerators(limit: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+            return dev - limit, dev + limit
+
+    # eq. 2 (speed-effort line)
+    lo1, hi1 = _bounds(*numerators(max_v), r - grad, r + grad, request, negative, zero)
+    # eq. 1 (effort-speed line) as |v| <= max_x/R - (1/R)|x|; R = 0 is the plain box |x| <= max_x
+    if exact:
+        plain = resist == 0.0
+        safe = torch.where(plain, torch.ones_like(resist), resist)
+        inv_r, limit_r = 1.0 / safe, max_x / safe
+    else:  # a resistance whose 1/R or max_x/R overflows acts as R = 0 (so does R = 0)
+        inv_r, limit_r = 1.0 / resist, max_x / resist
+        plain = ~(torch.isfinite(inv_r) & torch.isfinite(limit_r))
+    lo2, hi2 = _bounds(*numerators(limit_r), r - inv_r, r + inv_r, request, negative, zero)
+    if negative is not None:
+        lower = _pmax(lo1, torch.where(plain, -max_x, lo2))
+        upper = _pmin(hi1, torch.where(plain, max_x, hi2))
+        # PxClamp(x, lower, upper) = PxMin(upper, PxMax(lower, x)), mirrored for negative requests
+        mirrored = _pmax(lower, _pmin(upper, request))
+        clamped = torch.where(negative, mirrored, _pmin(upper, _pmax(lower, request))) * sign
+        return torch.where(lower > upper, torch.zeros_like(clamped), clamped)  # empty: +0.0
+    lo2 = torch.where(plain, -math.inf, lo2)
+    hi2 = torch.where(plain, math.inf, hi2)
+    # |x| <= max_x bounds the interval; the floor also holds PhysX's PxMax(0, bound1)
+    floor = torch.clamp_min(-max_x, 0.0)
+    lower = torch.maximum(torch.maximum(lo1, lo2), floor)
+    upper = torch.minimum(torch.minimum(torch.minimum(hi1, hi2), max_x), request)
+    # lower <= min(upper, x) is PhysX's lower <= upper here; a NaN fails it: the drive lets go
+    return torch.where(lower <= upper, upper * sign, 0.0)
+
+
+def _impulse_tensors(values: tuple[object, ...], dtype: Any) -> list[torch.Tensor]:
+    import torch
+
+    return list(torch.broadcast_tensors(*_tensors(values, dtype)))
 
 
 def clamp_drive_impulse(
@@ -151,10 +206,11 @@ def clamp_drive_impulse(
     velocity_dependent_resistance: Any,
     *,
     dtype: Any = None,
+    physx_exact: bool = False,
 ) -> torch.Tensor:
     """PhysX ``clampDriveImpulse`` on tensors, the core's signature and argument order.
 
-    See :func:`drive_envelope.clamp_drive_impulse` for the meaning of each argument.
+    See :func:`drive_envelope.clamp_drive_impulse` for the meaning of each argument and the modes.
 
     Args:
         joint_vel0: Joint velocity containing ``drive_impulse0`` [rad/s or m/s].
@@ -167,60 +223,24 @@ def clamp_drive_impulse(
         velocity_dependent_resistance: ``velocityDependentResistance * dt`` [N*m*s/rad or N*s/m].
         dtype: Float dtype to compute in (torch or NumPy); default: that of the first float tensor
             argument, else float32 (PhysX's precision).
+        physx_exact: Reproduce PhysX's arithmetic bit for bit (default: the effort cap kept, no NaN).
 
     Returns:
         The clamped total impulse [N*m*s or N*s], a tensor of the broadcast shape on the device of
         the first tensor argument (``.numpy()`` / ``numpy.asarray`` read it on the CPU).
     """
-    import torch
-
-    tensors = _tensors(
-        (
-            joint_vel0,
-            drive_impulse0,
-            drive_impulse,
-            response,
-            max_joint_vel,
-            max_impulse,
-            speed_impulse_gradient,
-            velocity_dependent_resistance,
-        ),
-        dtype,
+    values = (
+        joint_vel0,
+        drive_impulse0,
+        drive_impulse,
+        response,
+        max_joint_vel,
+        max_impulse,
+        speed_impulse_gradient,
+        velocity_dependent_resistance,
     )
-    return _clamp_drive_impulse_tensors(*torch.broadcast_tensors(*tensors))
-
-
-def _clamp_drive_impulse_tensors(
-    v0: torch.Tensor,
-    x0: torch.Tensor,
-    x: torch.Tensor,
-    r: torch.Tensor,
-    max_v: torch.Tensor,
-    max_x: torch.Tensor,
-    grad: torch.Tensor,
-    resist: torch.Tensor,
-) -> torch.Tensor:
-    """The port proper, on tensors of one shape, dtype and device (what ``torch.compile`` fuses)."""
-    import torch
-
-    dev = x0 * r - v0
-    positive = x > 0.0
-    # eq. 2 (speed-effort line), per sign of the request
-    pos_lo, pos_hi = _bounds_positive(dev, max_v, r - grad, r + grad, x)
-    neg_lo, neg_hi = _bounds_negative(dev, max_v, r + grad, r - grad, x)
-    lo1, hi1 = torch.where(positive, pos_lo, neg_lo), torch.where(positive, pos_hi, neg_hi)
-    # eq. 1 (effort-speed line) as |v| <= max_x/R - (1/R)|x|; R = 0 is the plain box |x| <= max_x
-    has_resistance = resist != 0.0
-    safe = torch.where(has_resistance, resist, torch.ones_like(resist))
-    inv_r, max_v_r = 1.0 / safe, max_x / safe
-    pos_lo2, pos_hi2 = _bounds_positive(dev, max_v_r, r - inv_r, r + inv_r, x)
-    neg_lo2, neg_hi2 = _bounds_negative(dev, max_v_r, r + inv_r, r - inv_r, x)
-    lo2 = torch.where(has_resistance, torch.where(positive, pos_lo2, neg_lo2), -max_x)
-    hi2 = torch.where(has_resistance, torch.where(positive, pos_hi2, neg_hi2), max_x)
-    lower = _pmax(lo1, lo2)
-    upper = _pmin(hi1, hi2)
-    clamped = _pmin(upper, _pmax(lower, x))  # PxClamp(x, lower, upper)
-    return torch.where(lower > upper, torch.zeros_like(x), clamped)
+    v0, x0, x, r, max_v, max_x, grad, resist = _impulse_tensors(values, dtype)
+    return _clamp_drive_impulse_tensors(v0, x0, x, r, max_v, max_x, grad, resist, exact=bool(physx_exact))
 
 
 @functools.cache
@@ -241,14 +261,15 @@ def fused_clamp_drive_impulse(
     velocity_dependent_resistance: Any,
     *,
     dtype: Any = None,
+    physx_exact: bool = False,
 ) -> torch.Tensor:
     """:func:`clamp_drive_impulse` fused into one kernel by ``torch.compile``: same arguments, same numbers.
 
     Eager PyTorch runs the port as about a hundred separate elementwise operations; Inductor fuses
     them into one loop (C++ on the CPU, Triton on CUDA), which is what makes the implicit clamp
-    cheap at RL scale. The first call for a new dtype, device or rank compiles (about a minute on
-    two CPU cores; PyTorch caches the result on disk), so use it in long runs, not one-off calls.
-    It needs what ``torch.compile`` needs (a C++ compiler for the CPU backend).
+    cheap at RL scale. The first call for a new dtype, device, rank or mode compiles (about a
+    minute on two CPU cores; PyTorch caches the result on disk), so use it in long runs, not one-off
+    calls. It needs what ``torch.compile`` needs (a C++ compiler for the CPU backend).
 
     Args:
         joint_vel0: Joint velocity containing ``drive_impulse0`` [rad/s or m/s].
@@ -260,67 +281,42 @@ def fused_clamp_drive_impulse(
         speed_impulse_gradient: ``speedEffortGradient / dt`` [(rad/s)/(N*m*s) or (m/s)/(N*s)].
         velocity_dependent_resistance: ``velocityDependentResistance * dt`` [N*m*s/rad or N*s/m].
         dtype: As in :func:`clamp_drive_impulse`.
+        physx_exact: As in :func:`clamp_drive_impulse`.
 
     Returns:
         The clamped total impulse [N*m*s or N*s], as :func:`clamp_drive_impulse`.
     """
-    import torch
-
-    tensors = _tensors(
-        (
-            joint_vel0,
-            drive_impulse0,
-            drive_impulse,
-            response,
-            max_joint_vel,
-            max_impulse,
-            speed_impulse_gradient,
-            velocity_dependent_resistance,
-        ),
-        dtype,
+    values = (
+        joint_vel0,
+        drive_impulse0,
+        drive_impulse,
+        response,
+        max_joint_vel,
+        max_impulse,
+        speed_impulse_gradient,
+        velocity_dependent_resistance,
     )
-    return _compiled_port()(*(t.contiguous() for t in torch.broadcast_tensors(*tensors)))
+    tensors = [t.contiguous() for t in _impulse_tensors(values, dtype)]
+    return _compiled_port()(*tensors, exact=bool(physx_exact))
 
 
-def effort_limit(
-    velocity: Any,
-    max_effort: Any,
-    max_actuator_velocity: Any = math.inf,
-    velocity_dependent_resistance: Any = 0.0,
-    speed_effort_gradient: Any = 0.0,
-    *,
-    dtype: Any = None,
-) -> torch.Tensor:
+def effort_limit(params: EnvelopeTensors, velocity: Any) -> torch.Tensor:
     """Largest |effort| at ``velocity``: ``min(max_effort - R|v|, (v_max - |v|)/G)`` clipped at 0.
 
     ``G = 0`` drops the second term and gives 0 where ``|v| > v_max`` (the division by zero gives
     ``-inf`` there and ``fmin`` skips the ``0/0`` NaN at ``|v| = v_max``), as the reference does.
 
     Args:
-        velocity: Joint velocity [rad/s or m/s].
-        max_effort: [N*m or N], per DOF or scalar.
-        max_actuator_velocity: [rad/s or m/s] (``inf`` allowed).
-        velocity_dependent_resistance: R [N*m*s/rad or N*s/m].
-        speed_effort_gradient: G [(rad/s)/(N*m) or (m/s)/N].
-        dtype: Float dtype; default as in :func:`clamp_drive_impulse`.
+        params: The envelope parameters (their dtype and device are the computation's).
+        velocity: Joint velocity [rad/s or m/s], broadcast with the parameters.
 
     Returns:
         The limit [N*m or N], broadcast shape.
     """
     import torch
 
-    v, max_e, max_v, resist, grad = torch.broadcast_tensors(
-        *_tensors(
-            (
-                velocity,
-                max_effort,
-                max_actuator_velocity,
-                velocity_dependent_resistance,
-                speed_effort_gradient,
-            ),
-            dtype,
-        )
-    )
+    params = _params(params)
+    v, max_e, max_v, resist, grad = torch.broadcast_tensors(*_states(params, velocity), *params.as_tuple())
     speed = v.abs()  # a fresh full-size buffer: the in-place ops below reuse it
     limit = torch.addcmul(max_e, resist, speed, value=-1.0)
     # in place where possible: at RL scale these ops are memory-bound and allocations cost as much
@@ -328,77 +324,52 @@ def effort_limit(
     return torch.fmin(limit, speed_line, out=limit).clamp_min_(0.0)
 
 
-def clamp_effort(
-    effort: Any,
-    velocity: Any,
-    max_effort: Any,
-    max_actuator_velocity: Any = math.inf,
-    velocity_dependent_resistance: Any = 0.0,
-    speed_effort_gradient: Any = 0.0,
-    *,
-    dtype: Any = None,
-) -> torch.Tensor:
+def clamp_effort(params: EnvelopeTensors, effort: Any, velocity: Any) -> torch.Tensor:
     """Explicit clamp: ``clip(effort, -L(v), L(v))`` with :func:`effort_limit` at the current velocity.
 
     Args:
+        params: The envelope parameters.
         effort: Requested effort [N*m or N].
         velocity: Current joint velocity [rad/s or m/s].
-        max_effort: [N*m or N], per DOF or scalar.
-        max_actuator_velocity: [rad/s or m/s] (``inf`` allowed).
-        velocity_dependent_resistance: R [N*m*s/rad or N*s/m].
-        speed_effort_gradient: G [(rad/s)/(N*m) or (m/s)/N].
-        dtype: Float dtype; default as in :func:`clamp_drive_impulse`.
 
     Returns:
-        Clamped effort [N*m or N], broadcast shape.
+        Clamped effort [N*m or N], broadcast shape (NaN stays NaN, like ``numpy.clip``).
     """
     import torch
 
-    kind = resolve_dtype(dtype, effort, velocity, max_effort)
-    device = _device((effort, velocity, max_effort))
-    limit = effort_limit(
-        velocity,
-        max_effort,
-        max_actuator_velocity,
-        velocity_dependent_resistance,
-        speed_effort_gradient,
-        dtype=kind,
-    )
-    tau = torch.as_tensor(effort, dtype=kind, device=device)
+    params = _params(params)
+    limit = effort_limit(params, velocity)
+    (tau,) = _states(params, effort)
     clamped = torch.minimum(tau, limit)  # minimum/maximum propagate NaN, like numpy.clip
     return torch.maximum(clamped, limit.neg_(), out=clamped)  # limit is a fresh buffer
 
 
 def clamp_effort_implicit(
+    params: EnvelopeTensors,
     requested_effort: Any,
     velocity: Any,
     response: Any,
     dt: float,
-    max_effort: Any,
-    max_actuator_velocity: Any = math.inf,
-    velocity_dependent_resistance: Any = 0.0,
-    speed_effort_gradient: Any = 0.0,
-    *,
     applied_effort: Any = 0.0,
-    dtype: Any = None,
 ) -> torch.Tensor:
     """PhysX's implicit clamp in effort units: :func:`clamp_drive_impulse` with ``x = effort*dt``.
 
+    Guarded like the core: ``|result| <= max_effort`` and no NaN for every finite input.
+
     Args:
+        params: The envelope parameters.
         requested_effort: Requested total actuator effort [N*m or N].
         velocity: Joint velocity that already contains ``applied_effort`` [rad/s or m/s].
         response: Joint velocity change per unit joint impulse [rad/s/(N*m*s) or m/s/(N*s)].
         dt: Time step [s], ``> 0``.
-        max_effort: [N*m or N], per DOF or scalar.
-        max_actuator_velocity: [rad/s or m/s] (``inf`` allowed).
-        velocity_dependent_resistance: R [N*m*s/rad or N*s/m].
-        speed_effort_gradient: G [(rad/s)/(N*m) or (m/s)/N].
         applied_effort: Total actuator effort already applied this step [N*m or N].
-        dtype: Float dtype; default as in :func:`clamp_drive_impulse`.
 
     Returns:
         Clamped total effort [N*m or N], broadcast shape.
     """
+    import torch
+
+    params = _params(params)
     if (
         isinstance(dt, bool)
         or not isinstance(dt, (int, float, np.floating))
@@ -406,20 +377,11 @@ def clamp_effort_implicit(
     ):
         raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
     step = float(dt)
-    tau, v, r, applied, max_e, max_v, resist, grad = _tensors(
-        (
-            requested_effort,
-            velocity,
-            response,
-            applied_effort,
-            max_effort,
-            max_actuator_velocity,
-            velocity_dependent_resistance,
-            speed_effort_gradient,
-        ),
-        dtype,
-    )
+    tau, v, r, applied = _states(params, requested_effort, velocity, response, applied_effort)
+    max_e, max_v, resist, grad = params.as_tuple()
     impulse = clamp_drive_impulse(
         v, applied * step, tau * step, r, max_v, max_e * step, grad / step, resist * step
     )
-    return impulse / step
+    # (x*dt)/dt can round one ulp above x or max_effort: the clamp grows neither
+    magnitude = torch.minimum(torch.fmin((impulse / step).abs(), tau.abs()), max_e)  # a NaN request: 0
+    return torch.copysign(magnitude, impulse)

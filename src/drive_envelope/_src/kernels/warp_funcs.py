@@ -1,214 +1,291 @@
-# mypy: disable-error-code="index"
-# (Warp kernel bodies index wp.array values, which Warp's type stubs do not declare indexable)
-"""Warp building blocks and kernels of the envelope, float32 with PhysX's float rules.
+# mypy: disable-error-code="index,valid-type"
+# (Warp kernel bodies index wp.array values and annotate with Warp types, which mypy does not follow)
+"""Warp building blocks and kernels of the envelope, with PhysX's float rules.
 
-Everything Warp-specific is created on first use by :func:`build` (Warp is imported there, never at
-module level, so importing this module stays free of it). The ``@wp.func`` building blocks are
-meant to be called inside users' own kernels; the module-private ``_..._kernel`` kernels back the
-launch wrappers of :mod:`drive_envelope.warp`.
+This module imports Warp at the top, as Newton's kernel modules do; only :mod:`drive_envelope.warp`
+and the launch wrappers (:mod:`drive_envelope._src.kernels.warp_ops`) import it, lazily. The
+``@wp.func`` building blocks are generic (``typing.Any`` arguments): one function serves
+``wp.float32`` and ``wp.float64`` (all arguments of one call share the type); Warp compiles one
+overload per type. The module-private ``_..._kernel`` kernels work on float32 arrays and back the
+launch wrappers.
 
-PhysX rules kept on purpose (``physx/source/lowleveldynamics/shared/DyCpuGpuArticulation.h``):
-
-* absolute epsilon ``2^-23`` on the denominators ``response -/+ gradient`` (below it a curve is
-  ignored, or turns into a yes/no test),
-* ``FLT_MAX`` sentinels for absent bounds,
-* ``PxMax(a, b) = a > b ? a : b`` and ``PxMin(a, b) = a < b ? a : b`` (PhysX's float
-  ``selectMax``/``selectMin``): which operand a NaN turns into follows from these selects, so they
-  are reproduced with ``wp.where`` instead of ``wp.max``/``wp.min``.
-
-This module deliberately has no ``from __future__ import annotations``: Warp reads the annotations
-of functions defined inside :func:`build`, which only resolve while ``wp`` is a live local there.
+``clamp_drive_impulse_func`` is the literal port of PhysX's ``clampDriveImpulse``
+(``physx/source/lowleveldynamics/shared/DyCpuGpuArticulation.h``), both request signs, with the
+default guard of :func:`drive_envelope.clamp_drive_impulse` (cap kept, never NaN) or, with
+``physx_exact=True``, PhysX's arithmetic bit for bit: absolute epsilon ``2^-23`` on the denominators
+``response -/+ gradient``, ``FLT_MAX`` sentinels, ``PxMax(a, b) = a > b ? a : b`` and
+``PxMin(a, b) = a < b ? a : b`` (which decide what a NaN turns into, hence ``wp.where`` and not
+``wp.max``/``wp.min``).
 """
 
-import functools
-import types
 from typing import Any
+
+import warp as wp
 
 from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
 
-__all__ = ["build", "warp_module"]
+__all__ = [
+    "clamp_drive_impulse_func",
+    "clamp_effort_func",
+    "clamp_effort_implicit_func",
+    "effort_limit_func",
+]
+
+# no fused multiply-add: dev = x0*r - v0 must round twice, as in PhysX's CPU build and NumPy (NVRTC
+# fuses by default). NaN tests are written x != x: Warp's isnan is a call on the CPU, ten times slower.
+wp.set_module_options({"fuse_fp": False})
+
+_EPS = wp.constant(PX_EPS_F32)
+_FLT_MAX = wp.constant(PX_MAX_F32)
+_INF = wp.constant(float("inf"))
 
 
-@functools.cache
-def build() -> types.SimpleNamespace:
-    """Import Warp and define the building blocks and kernels (once per process).
+@wp.func
+def _px_max(a: Any, b: Any):
+    """``PxMax(float)`` = ``intrinsics::selectMax``: ``a > b ? a : b`` (a NaN in ``b`` survives)."""
+    return wp.where(a > b, a, b)
 
-    Returns:
-        A namespace with the ``@wp.func`` building blocks (``effort_limit_func``,
-        ``clamp_effort_func``, ``clamp_drive_impulse_func``, ``clamp_effort_implicit_func``) and the
-        kernels (``effort_limit_kernel``, ``clamp_effort_kernel``, ``clamp_drive_impulse_kernel``,
-        ``clamp_effort_implicit_kernel``).
+
+@wp.func
+def _px_min(a: Any, b: Any):
+    """``PxMin(float)`` = ``intrinsics::selectMin``: ``a < b ? a : b`` (a NaN in ``b`` survives)."""
+    return wp.where(a < b, a, b)
+
+
+@wp.func
+def _max_nan(a: Any, b: Any):
+    """``numpy.maximum``: the larger operand, NaN if either is NaN."""
+    return wp.where(a != a, a, wp.where(a > b, a, b))
+
+
+@wp.func
+def _min_nan(a: Any, b: Any):
+    """``numpy.minimum``: the smaller operand, NaN if either is NaN."""
+    return wp.where(a != a, a, wp.where(a < b, a, b))
+
+
+@wp.func
+def effort_limit_func(
+    max_effort: Any,
+    max_actuator_velocity: Any,
+    velocity_dependent_resistance: Any,
+    speed_effort_gradient: Any,
+    velocity: Any,
+):
+    """Largest |effort| [N*m or N] the envelope allows at ``velocity`` [rad/s or m/s].
+
+    limit = max(min(max_effort - R*|v|, (v_max - |v|)/G), 0); with G = 0 the second term is
+    replaced by the test |v| > v_max -> 0. A NaN velocity gives NaN.
     """
-    import warp as wp
+    zero = type(velocity)(0.0)
+    speed = wp.abs(velocity)
+    limit = max_effort - velocity_dependent_resistance * speed
+    if speed_effort_gradient > zero:
+        limit = _min_nan(limit, (max_actuator_velocity - speed) / speed_effort_gradient)
+    elif speed > max_actuator_velocity:
+        limit = zero
+    return _max_nan(limit, zero)
 
-    eps = wp.constant(wp.float32(PX_EPS_F32))
-    big = wp.constant(wp.float32(PX_MAX_F32))
 
-    @wp.func
-    def _px_max(a: wp.float32, b: wp.float32) -> wp.float32:
-        """``PxMax(float)`` = ``intrinsics::selectMax``: ``a > b ? a : b`` (a NaN in ``b`` survives)."""
-        return wp.where(a > b, a, b)
+@wp.func
+def clamp_effort_func(
+    max_effort: Any,
+    max_actuator_velocity: Any,
+    velocity_dependent_resistance: Any,
+    speed_effort_gradient: Any,
+    effort: Any,
+    velocity: Any,
+):
+    """Explicit clamp: ``clip(effort, -L(v), L(v))`` [N*m or N] at the current velocity v (NaN stays NaN)."""
+    limit = effort_limit_func(
+        max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient, velocity
+    )
+    return _min_nan(_max_nan(effort, type(limit)(-1.0) * limit), limit)
 
-    @wp.func
-    def _px_min(a: wp.float32, b: wp.float32) -> wp.float32:
-        """``PxMin(float)`` = ``intrinsics::selectMin``: ``a < b ? a : b`` (a NaN in ``b`` survives)."""
-        return wp.where(a < b, a, b)
 
-    @wp.func
-    def _np_min(a: wp.float32, b: wp.float32) -> wp.float32:
-        """``numpy.minimum``: a NaN in either operand wins (the reference's explicit clamp)."""
-        return wp.where((b < a) or (b != b), b, a)
+@wp.func
+def _bounds_positive_physx(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
+    """``computeBoundsForPositiveImpulse``: feasible (lower, upper) for a positive request.
 
-    @wp.func
-    def _np_max(a: wp.float32, b: wp.float32) -> wp.float32:
-        """``numpy.maximum``: a NaN in either operand wins."""
-        return wp.where((b > a) or (b != b), b, a)
-
-    @wp.func
-    def effort_limit_func(
-        velocity: wp.float32,
-        max_effort: wp.float32,
-        max_actuator_velocity: wp.float32,
-        velocity_dependent_resistance: wp.float32,
-        speed_effort_gradient: wp.float32,
-    ) -> wp.float32:
-        """Largest |effort| [N*m or N] the envelope allows at ``velocity`` [rad/s or m/s].
-
-        limit = max(min(max_effort - R*|v|, (v_max - |v|)/G), 0); with G = 0 the second term is
-        replaced by the test |v| > v_max -> 0.
-        """
-        speed = wp.abs(velocity)
-        limit = max_effort - velocity_dependent_resistance * speed
-        if speed_effort_gradient > wp.float32(0.0):
-            limit = _np_min(limit, (max_actuator_velocity - speed) / speed_effort_gradient)
-        elif speed > max_actuator_velocity:
-            limit = wp.float32(0.0)
-        return _np_max(limit, wp.float32(0.0))
-
-    @wp.func
-    def clamp_effort_func(
-        effort: wp.float32,
-        velocity: wp.float32,
-        max_effort: wp.float32,
-        max_actuator_velocity: wp.float32,
-        velocity_dependent_resistance: wp.float32,
-        speed_effort_gradient: wp.float32,
-    ) -> wp.float32:
-        """Explicit clamp: ``clip(effort, -L(v), L(v))`` [N*m or N] at the current velocity v."""
-        limit = effort_limit_func(
-            velocity, max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient
-        )
-        return _np_min(_np_max(effort, -limit), limit)
-
-    @wp.func
-    def _bounds_positive(
-        dev: wp.float32,
-        max_v: wp.float32,
-        denom1: wp.float32,
-        denom2: wp.float32,
-        impulse: wp.float32,
-        denom_tol: wp.float32,
-    ) -> wp.vec2:
-        """``computeBoundsForPositiveImpulse``: feasible [lower, upper] for a positive request.
-
-        ``denom_tol`` is PhysX's epsilon on the denominators (``eps*dt`` in effort units).
-        """
-        if wp.abs(denom2) < denom_tol:  # the curve is ignored
-            return wp.vec2(-big, big)
-        if wp.abs(denom1) < denom_tol:  # the lower curve is a yes/no test on (dev - max_v)
-            flat = -big
-            if not (wp.abs(dev - max_v) < eps) and (dev - max_v) > wp.float32(0.0):
-                flat = big
-            return wp.vec2(_px_max(wp.float32(0.0), flat), (dev + max_v) / denom2)
-        bound1 = (dev - max_v) / denom1
-        bound2 = (dev + max_v) / denom2
-        if denom1 >= wp.float32(0.0):
-            return wp.vec2(_px_max(wp.float32(0.0), bound1), _px_min(bound2, impulse))
-        return wp.vec2(wp.float32(0.0), _px_min(_px_min(bound1, bound2), impulse))
-
-    @wp.func
-    def _bounds_negative(
-        dev: wp.float32,
-        max_v: wp.float32,
-        denom1: wp.float32,
-        denom2: wp.float32,
-        impulse: wp.float32,
-        denom_tol: wp.float32,
-    ) -> wp.vec2:
-        """``computeBoundsForNegativeImpulse``: feasible [lower, upper] for a negative or zero request."""
-        if wp.abs(denom1) < denom_tol:
-            return wp.vec2(-big, big)
-        if wp.abs(denom2) < denom_tol:
+    ``tol`` is PhysX's epsilon on the denominators (``2^-23``, times dt in effort units).
+    """
+    zero, eps, big = type(dev)(0.0), type(dev)(_EPS), type(dev)(_FLT_MAX)
+    if wp.abs(denom2) < tol:  # the curve is ignored
+        return -big, big
+    if wp.abs(denom1) < tol:  # the lower curve is a yes/no test on (dev - limit)
+        flat = -big
+        if not (wp.abs(dev - limit) < eps) and (dev - limit) > zero:
             flat = big
-            if not (wp.abs(dev + max_v) < eps) and not ((dev + max_v) > wp.float32(0.0)):
-                flat = -big
-            return wp.vec2((dev - max_v) / denom1, _px_min(wp.float32(0.0), flat))
-        bound1 = (dev - max_v) / denom1
-        bound2 = (dev + max_v) / denom2
-        if denom2 >= wp.float32(0.0):
-            return wp.vec2(_px_max(bound1, impulse), _px_min(wp.float32(0.0), bound2))
-        return wp.vec2(_px_max(_px_max(bound1, bound2), impulse), wp.float32(0.0))
+        return _px_max(zero, flat), (dev + limit) / denom2
+    bound1 = (dev - limit) / denom1
+    bound2 = (dev + limit) / denom2
+    if denom1 >= zero:
+        return _px_max(zero, bound1), _px_min(bound2, impulse)
+    return zero, _px_min(_px_min(bound1, bound2), impulse)
 
-    @wp.func
-    def _clamp_impulse(
-        joint_vel0: wp.float32,
-        drive_impulse0: wp.float32,
-        drive_impulse: wp.float32,
-        response: wp.float32,
-        max_joint_vel: wp.float32,
-        max_impulse: wp.float32,
-        speed_impulse_gradient: wp.float32,
-        velocity_dependent_resistance: wp.float32,
-        denom_tol: wp.float32,
-    ) -> wp.float32:
-        """``clampDriveImpulse`` with the denominators' epsilon as an argument."""
-        dev = drive_impulse0 * response - joint_vel0
-        resist = velocity_dependent_resistance
-        grad = speed_impulse_gradient
-        b1 = wp.vec2()
-        b2 = wp.vec2(-max_impulse, max_impulse)
-        if drive_impulse > wp.float32(0.0):
-            b1 = _bounds_positive(
-                dev, max_joint_vel, response - grad, response + grad, drive_impulse, denom_tol
-            )
-            if resist != wp.float32(0.0):
-                inv = wp.float32(1.0) / resist
-                b2 = _bounds_positive(
-                    dev, max_impulse / resist, response - inv, response + inv, drive_impulse, denom_tol
-                )
-        else:
-            b1 = _bounds_negative(
-                dev, max_joint_vel, response + grad, response - grad, drive_impulse, denom_tol
-            )
-            if resist != wp.float32(0.0):
-                inv = wp.float32(1.0) / resist
-                b2 = _bounds_negative(
-                    dev, max_impulse / resist, response + inv, response - inv, drive_impulse, denom_tol
-                )
-        lower = _px_max(b1[0], b2[0])
-        upper = _px_min(b1[1], b2[1])
-        if lower > upper:
-            return wp.float32(0.0)
-        return _px_min(upper, _px_max(lower, drive_impulse))
 
-    @wp.func
-    def clamp_drive_impulse_func(
-        joint_vel0: wp.float32,
-        drive_impulse0: wp.float32,
-        drive_impulse: wp.float32,
-        response: wp.float32,
-        max_joint_vel: wp.float32,
-        max_impulse: wp.float32,
-        speed_impulse_gradient: wp.float32,
-        velocity_dependent_resistance: wp.float32,
-    ) -> wp.float32:
-        """PhysX ``clampDriveImpulse``: largest feasible total impulse [N*m*s or N*s] not above the request.
+@wp.func
+def _bounds_negative_physx(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
+    """``computeBoundsForNegativeImpulse``: feasible (lower, upper) for a negative or zero request."""
+    zero, eps, big = type(dev)(0.0), type(dev)(_EPS), type(dev)(_FLT_MAX)
+    if wp.abs(denom1) < tol:
+        return -big, big
+    if wp.abs(denom2) < tol:
+        flat = big
+        if not (wp.abs(dev + limit) < eps) and not ((dev + limit) > zero):
+            flat = -big
+        return (dev - limit) / denom1, _px_min(zero, flat)
+    bound1 = (dev - limit) / denom1
+    bound2 = (dev + limit) / denom2
+    if denom2 >= zero:
+        return _px_max(bound1, impulse), _px_min(zero, bound2)
+    return _px_max(_px_max(bound1, bound2), impulse), zero
 
-        Feasible: |v(x)| <= max_joint_vel - speed_impulse_gradient*|x| and
-        |x| <= max_impulse - velocity_dependent_resistance*|v(x)|, v(x) = joint_vel0 + response*(x - x0);
-        an empty set gives 0 (the drive lets go).
-        """
-        return _clamp_impulse(
+
+@wp.func
+def _bounds_positive(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
+    """The guarded ``computeBoundsForPositiveImpulse``: feasible (lower, upper) for a positive request.
+
+    Absent bounds are inf, minima and maxima carry NaN, and a flat curve that says no gives a NaN
+    lower bound (the caller then returns 0).
+    """
+    zero, eps = type(dev)(0.0), type(dev)(_EPS)
+    if wp.abs(denom2) < tol:  # the curve is ignored
+        return type(dev)(-_INF), type(dev)(_INF)
+    if wp.abs(denom1) < tol:  # the lower curve is a yes/no test on (dev - limit); NaN answers no
+        lower = type(dev)(wp.nan)
+        if wp.abs(dev - limit) < eps or (dev - limit) <= zero:
+            lower = zero
+        return lower, (dev + limit) / denom2
+    bound1 = (dev - limit) / denom1
+    bound2 = (dev + limit) / denom2
+    if denom1 >= zero:
+        return _max_nan(zero, bound1), _min_nan(bound2, impulse)
+    return zero, _min_nan(_min_nan(bound1, bound2), impulse)
+
+
+@wp.func
+def _bounds_negative(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
+    """The guarded ``computeBoundsForNegativeImpulse`` (a NaN upper bound where a flat curve says no)."""
+    zero, eps = type(dev)(0.0), type(dev)(_EPS)
+    if wp.abs(denom1) < tol:
+        return type(dev)(-_INF), type(dev)(_INF)
+    if wp.abs(denom2) < tol:
+        upper = type(dev)(wp.nan)
+        if wp.abs(dev + limit) < eps or (dev + limit) >= zero:
+            upper = zero
+        return (dev - limit) / denom1, upper
+    bound1 = (dev - limit) / denom1
+    bound2 = (dev + limit) / denom2
+    if denom2 >= zero:
+        return _max_nan(bound1, impulse), _min_nan(zero, bound2)
+    return _max_nan(_max_nan(bound1, bound2), impulse), zero
+
+
+@wp.func
+def _clamp_impulse_physx(
+    joint_vel0: Any,
+    drive_impulse0: Any,
+    drive_impulse: Any,
+    response: Any,
+    max_joint_vel: Any,
+    max_impulse: Any,
+    speed_impulse_gradient: Any,
+    velocity_dependent_resistance: Any,
+    tol: Any,
+):
+    """PhysX's ``clampDriveImpulse`` bit for bit, with the denominators' epsilon ``tol`` as an argument."""
+    zero, one = type(joint_vel0)(0.0), type(joint_vel0)(1.0)
+    dev = drive_impulse0 * response - joint_vel0
+    resist = velocity_dependent_resistance
+    grad = speed_impulse_gradient
+    lo1, hi1 = zero, zero
+    lo2, hi2 = type(max_impulse)(-1.0) * max_impulse, max_impulse  # (Warp's -x is 0 - x: -0.0 lost)
+    if drive_impulse > zero:
+        lo1, hi1 = _bounds_positive_physx(
+            dev, max_joint_vel, response - grad, response + grad, drive_impulse, tol
+        )
+        if resist != zero:
+            inv = one / resist
+            limit = max_impulse / resist
+            lo2, hi2 = _bounds_positive_physx(dev, limit, response - inv, response + inv, drive_impulse, tol)
+    else:
+        lo1, hi1 = _bounds_negative_physx(
+            dev, max_joint_vel, response + grad, response - grad, drive_impulse, tol
+        )
+        if resist != zero:
+            inv = one / resist
+            limit = max_impulse / resist
+            lo2, hi2 = _bounds_negative_physx(dev, limit, response + inv, response - inv, drive_impulse, tol)
+    lower = _px_max(lo1, lo2)
+    upper = _px_min(hi1, hi2)
+    if lower > upper:  # even zero effort is infeasible: the drive lets go
+        return zero
+    return _px_min(upper, _px_max(lower, drive_impulse))
+
+
+@wp.func
+def _clamp_impulse(
+    joint_vel0: Any,
+    drive_impulse0: Any,
+    drive_impulse: Any,
+    response: Any,
+    max_joint_vel: Any,
+    max_impulse: Any,
+    speed_impulse_gradient: Any,
+    velocity_dependent_resistance: Any,
+    tol: Any,
+):
+    """The guarded ``clampDriveImpulse`` (the default): |result| <= max_impulse, no NaN."""
+    zero, one = type(joint_vel0)(0.0), type(joint_vel0)(1.0)
+    dev = drive_impulse0 * response - joint_vel0
+    resist = velocity_dependent_resistance
+    grad = speed_impulse_gradient
+    inv = one / resist
+    limit = max_impulse / resist
+    # a resistance whose 1/R or max_impulse/R overflows acts as R = 0 (inf - inf and NaN are not 0)
+    plain = resist == zero or (inv - inv) + (limit - limit) != zero
+    lo1, hi1 = zero, zero
+    lo2, hi2 = type(dev)(-_INF), type(dev)(_INF)
+    if drive_impulse > zero:
+        lo1, hi1 = _bounds_positive(dev, max_joint_vel, response - grad, response + grad, drive_impulse, tol)
+        if not plain:
+            lo2, hi2 = _bounds_positive(dev, limit, response - inv, response + inv, drive_impulse, tol)
+    else:
+        lo1, hi1 = _bounds_negative(dev, max_joint_vel, response + grad, response - grad, drive_impulse, tol)
+        if not plain:
+            lo2, hi2 = _bounds_negative(dev, limit, response + inv, response - inv, drive_impulse, tol)
+    # |x| <= max_impulse bounds the interval (implied by eq. 1, kept through rounding)
+    lower = _max_nan(_max_nan(lo1, lo2), type(max_impulse)(-1.0) * max_impulse)
+    upper = _min_nan(_min_nan(hi1, hi2), max_impulse)
+    clamped = _min_nan(upper, _max_nan(lower, drive_impulse))
+    if not (lower <= upper) or clamped != clamped:  # empty, or a NaN: the drive lets go
+        return zero
+    return clamped
+
+
+@wp.func
+def clamp_drive_impulse_func(
+    joint_vel0: Any,
+    drive_impulse0: Any,
+    drive_impulse: Any,
+    response: Any,
+    max_joint_vel: Any,
+    max_impulse: Any,
+    speed_impulse_gradient: Any,
+    velocity_dependent_resistance: Any,
+    physx_exact: bool = False,
+):
+    """PhysX ``clampDriveImpulse``: largest feasible total impulse [N*m*s or N*s] not above the request.
+
+    Feasible: |v(x)| <= max_joint_vel - speed_impulse_gradient*|x| and
+    |x| <= max_impulse - velocity_dependent_resistance*|v(x)|, v(x) = joint_vel0 + response*(x - x0);
+    an empty set gives 0 (the drive lets go). Default: the cap kept and never NaN; ``physx_exact``:
+    PhysX's arithmetic bit for bit.
+    """
+    tol = type(joint_vel0)(_EPS)
+    if physx_exact:
+        return _clamp_impulse_physx(
             joint_vel0,
             drive_impulse0,
             drive_impulse,
@@ -217,153 +294,157 @@ def build() -> types.SimpleNamespace:
             max_impulse,
             speed_impulse_gradient,
             velocity_dependent_resistance,
-            eps,
+            tol,
         )
-
-    @wp.func
-    def clamp_effort_implicit_func(
-        requested_effort: wp.float32,
-        velocity: wp.float32,
-        response: wp.float32,
-        applied_effort: wp.float32,
-        dt: wp.float32,
-        max_effort: wp.float32,
-        max_actuator_velocity: wp.float32,
-        velocity_dependent_resistance: wp.float32,
-        speed_effort_gradient: wp.float32,
-    ) -> wp.float32:
-        """Implicit clamp in effort units [N*m or N]: PhysX's impulse clamp with x = effort*dt.
-
-        The clamp is invariant under scaling impulses by 1/dt, so it runs in effort units directly
-        (response*dt per unit effort, max_effort, G, R, epsilon on the denominators times dt): the
-        same result as clampDriveImpulse(v, e0*dt, e*dt, r, v_max, max_effort*dt, G/dt, R*dt)/dt
-        up to float32 rounding, without its five scalings and two divisions.
-        """
-        return _clamp_impulse(
-            velocity,
-            applied_effort,
-            requested_effort,
-            response * dt,
-            max_actuator_velocity,
-            max_effort,
-            speed_effort_gradient,
-            velocity_dependent_resistance,
-            eps * dt,
-        )
-
-    @wp.kernel(enable_backward=False)
-    def _effort_limit_kernel(
-        velocity: wp.array[wp.float32],
-        max_effort: wp.array[wp.float32],
-        max_actuator_velocity: wp.array[wp.float32],
-        velocity_dependent_resistance: wp.array[wp.float32],
-        speed_effort_gradient: wp.array[wp.float32],
-        limit: wp.array[wp.float32],
-    ):
-        """limit[i] = effort_limit(velocity[i]) with DOF i's envelope."""
-        i = wp.tid()
-        limit[i] = effort_limit_func(
-            velocity[i],
-            max_effort[i],
-            max_actuator_velocity[i],
-            velocity_dependent_resistance[i],
-            speed_effort_gradient[i],
-        )
-
-    @wp.kernel(enable_backward=False)
-    def _clamp_effort_kernel(
-        effort: wp.array[wp.float32],
-        velocity: wp.array[wp.float32],
-        max_effort: wp.array[wp.float32],
-        max_actuator_velocity: wp.array[wp.float32],
-        velocity_dependent_resistance: wp.array[wp.float32],
-        speed_effort_gradient: wp.array[wp.float32],
-        clamped: wp.array[wp.float32],
-    ):
-        """clamped[i] = clip(effort[i], -L_i(velocity[i]), L_i(velocity[i]))."""
-        i = wp.tid()
-        clamped[i] = clamp_effort_func(
-            effort[i],
-            velocity[i],
-            max_effort[i],
-            max_actuator_velocity[i],
-            velocity_dependent_resistance[i],
-            speed_effort_gradient[i],
-        )
-
-    @wp.kernel(enable_backward=False)
-    def _clamp_drive_impulse_kernel(
-        joint_vel0: wp.array[wp.float32],
-        drive_impulse0: wp.array[wp.float32],
-        drive_impulse: wp.array[wp.float32],
-        response: wp.array[wp.float32],
-        max_joint_vel: wp.array[wp.float32],
-        max_impulse: wp.array[wp.float32],
-        speed_impulse_gradient: wp.array[wp.float32],
-        velocity_dependent_resistance: wp.array[wp.float32],
-        clamped: wp.array[wp.float32],
-    ):
-        """clamped[i] = clampDriveImpulse(...) of DOF i, PhysX argument order."""
-        i = wp.tid()
-        clamped[i] = clamp_drive_impulse_func(
-            joint_vel0[i],
-            drive_impulse0[i],
-            drive_impulse[i],
-            response[i],
-            max_joint_vel[i],
-            max_impulse[i],
-            speed_impulse_gradient[i],
-            velocity_dependent_resistance[i],
-        )
-
-    @wp.kernel(enable_backward=False)
-    def _clamp_effort_implicit_kernel(
-        requested_effort: wp.array[wp.float32],
-        velocity: wp.array[wp.float32],
-        response: wp.array[wp.float32],
-        applied_effort: wp.array[wp.float32],
-        dt: wp.float32,
-        max_effort: wp.array[wp.float32],
-        max_actuator_velocity: wp.array[wp.float32],
-        velocity_dependent_resistance: wp.array[wp.float32],
-        speed_effort_gradient: wp.array[wp.float32],
-        clamped: wp.array[wp.float32],
-    ):
-        """clamped[i] = clampDriveImpulse(effort*dt at the end-of-step velocity) / dt for DOF i."""
-        i = wp.tid()
-        clamped[i] = clamp_effort_implicit_func(
-            requested_effort[i],
-            velocity[i],
-            response[i],
-            applied_effort[i],
-            dt,
-            max_effort[i],
-            max_actuator_velocity[i],
-            velocity_dependent_resistance[i],
-            speed_effort_gradient[i],
-        )
-
-    @wp.kernel(enable_backward=False)
-    def _copy_kernel(src: wp.array[wp.float32], dst: wp.array[wp.float32]):
-        """dst[i] = src[i]: the bandwidth baseline of the benchmarks."""
-        i = wp.tid()
-        dst[i] = src[i]
-
-    return types.SimpleNamespace(
-        effort_limit_func=effort_limit_func,
-        clamp_effort_func=clamp_effort_func,
-        clamp_drive_impulse_func=clamp_drive_impulse_func,
-        clamp_effort_implicit_func=clamp_effort_implicit_func,
-        effort_limit_kernel=_effort_limit_kernel,
-        clamp_effort_kernel=_clamp_effort_kernel,
-        clamp_drive_impulse_kernel=_clamp_drive_impulse_kernel,
-        clamp_effort_implicit_kernel=_clamp_effort_implicit_kernel,
-        copy_kernel=_copy_kernel,
+    return _clamp_impulse(
+        joint_vel0,
+        drive_impulse0,
+        drive_impulse,
+        response,
+        max_joint_vel,
+        max_impulse,
+        speed_impulse_gradient,
+        velocity_dependent_resistance,
+        tol,
     )
 
 
-def warp_module() -> Any:
-    """The ``warp`` module (imported on first use)."""
-    import warp as wp
+@wp.func
+def clamp_effort_implicit_func(
+    max_effort: Any,
+    max_actuator_velocity: Any,
+    velocity_dependent_resistance: Any,
+    speed_effort_gradient: Any,
+    requested_effort: Any,
+    velocity: Any,
+    response: Any,
+    dt: Any,
+    applied_effort: Any,
+):
+    """Implicit clamp in effort units [N*m or N]: PhysX's impulse clamp with x = effort*dt, guarded.
 
-    return wp
+    The clamp is invariant under scaling impulses by 1/dt, so it runs in effort units directly
+    (response*dt per unit effort, max_effort, G, R, epsilon on the denominators times dt): the
+    same result as clampDriveImpulse(v, e0*dt, e*dt, r, v_max, max_effort*dt, G/dt, R*dt)/dt up to
+    rounding, without its five scalings and two divisions; |result| <= max_effort always.
+    """
+    return _clamp_impulse(
+        velocity,
+        applied_effort,
+        requested_effort,
+        response * dt,
+        max_actuator_velocity,
+        max_effort,
+        speed_effort_gradient,
+        velocity_dependent_resistance,
+        type(dt)(_EPS) * dt,
+    )
+
+
+@wp.kernel(enable_backward=False)
+def _effort_limit_kernel(
+    max_effort: wp.array[wp.float32],
+    max_actuator_velocity: wp.array[wp.float32],
+    velocity_dependent_resistance: wp.array[wp.float32],
+    speed_effort_gradient: wp.array[wp.float32],
+    velocity: wp.array[wp.float32],
+    limit: wp.array[wp.float32],
+):
+    """limit[i] = max(min(max_effort - R|v|, (v_max - |v|)/G), 0) with DOF i's envelope, v = velocity[i]."""
+    i = wp.tid()
+    limit[i] = effort_limit_func(
+        max_effort[i],
+        max_actuator_velocity[i],
+        velocity_dependent_resistance[i],
+        speed_effort_gradient[i],
+        velocity[i],
+    )
+
+
+@wp.kernel(enable_backward=False)
+def _clamp_effort_kernel(
+    max_effort: wp.array[wp.float32],
+    max_actuator_velocity: wp.array[wp.float32],
+    velocity_dependent_resistance: wp.array[wp.float32],
+    speed_effort_gradient: wp.array[wp.float32],
+    effort: wp.array[wp.float32],
+    velocity: wp.array[wp.float32],
+    clamped: wp.array[wp.float32],
+):
+    """clamped[i] = clip(effort[i], -L_i(v), L_i(v)), v = velocity[i], L_i the effort limit of DOF i."""
+    i = wp.tid()
+    clamped[i] = clamp_effort_func(
+        max_effort[i],
+        max_actuator_velocity[i],
+        velocity_dependent_resistance[i],
+        speed_effort_gradient[i],
+        effort[i],
+        velocity[i],
+    )
+
+
+@wp.kernel(enable_backward=False)
+def _clamp_drive_impulse_kernel(
+    joint_vel0: wp.array[wp.float32],
+    drive_impulse0: wp.array[wp.float32],
+    drive_impulse: wp.array[wp.float32],
+    response: wp.array[wp.float32],
+    max_joint_vel: wp.array[wp.float32],
+    max_impulse: wp.array[wp.float32],
+    speed_impulse_gradient: wp.array[wp.float32],
+    velocity_dependent_resistance: wp.array[wp.float32],
+    physx_exact: bool,
+    clamped: wp.array[wp.float32],
+):
+    """clamped[i] = the largest x of drive_impulse[i]'s sign, |x| <= |drive_impulse[i]|, with v(x) feasible.
+
+    Feasible: |v(x)| <= max_joint_vel - G|x| and |x| <= max_impulse - R|v(x)|,
+    v(x) = joint_vel0 + response*(x - drive_impulse0); none gives 0 (the drive lets go).
+    """
+    i = wp.tid()
+    clamped[i] = clamp_drive_impulse_func(
+        joint_vel0[i],
+        drive_impulse0[i],
+        drive_impulse[i],
+        response[i],
+        max_joint_vel[i],
+        max_impulse[i],
+        speed_impulse_gradient[i],
+        velocity_dependent_resistance[i],
+        physx_exact,
+    )
+
+
+@wp.kernel(enable_backward=False)
+def _clamp_effort_implicit_kernel(
+    max_effort: wp.array[wp.float32],
+    max_actuator_velocity: wp.array[wp.float32],
+    velocity_dependent_resistance: wp.array[wp.float32],
+    speed_effort_gradient: wp.array[wp.float32],
+    requested_effort: wp.array[wp.float32],
+    velocity: wp.array[wp.float32],
+    response: wp.array[wp.float32],
+    dt: wp.float32,
+    applied_effort: wp.array[wp.float32],
+    clamped: wp.array[wp.float32],
+):
+    """clamped[i] = clampDriveImpulse(e*dt) / dt at the end-of-step velocity v + r*dt*(e - e0), DOF i."""
+    i = wp.tid()
+    clamped[i] = clamp_effort_implicit_func(
+        max_effort[i],
+        max_actuator_velocity[i],
+        velocity_dependent_resistance[i],
+        speed_effort_gradient[i],
+        requested_effort[i],
+        velocity[i],
+        response[i],
+        dt,
+        applied_effort[i],
+    )
+
+
+@wp.kernel(enable_backward=False)
+def _copy_kernel(src: wp.array[wp.float32], dst: wp.array[wp.float32]):
+    """dst[i] = src[i]: the bandwidth baseline of the benchmarks."""
+    i = wp.tid()
+    dst[i] = src[i]

@@ -1,9 +1,11 @@
 """Launch wrappers of the Warp kernels over struct-of-arrays buffers (``N`` DOFs, per-DOF parameters).
 
 Scalars are validated on the host before any array is built (:meth:`EnvelopeArrays.from_envelopes`,
-:meth:`EnvelopeArrays.from_numpy`); an :class:`EnvelopeArrays` built from existing Warp arrays, and
+:meth:`EnvelopeArrays.from_values`); an :class:`EnvelopeArrays` built from existing Warp arrays, and
 every launch, check shapes, dtypes and devices only (Newton's validation contract: reading array
-contents back would force a device-to-host copy).
+contents back would force a device-to-host copy). The kernels live in
+:mod:`drive_envelope._src.kernels.warp_funcs`, which imports Warp; this module imports it on first
+use, so importing it stays free of Warp.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -19,7 +22,7 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.warp_funcs import build, warp_module
+from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
 
 __all__ = [
     "EnvelopeArrays",
@@ -31,15 +34,29 @@ __all__ = [
 ]
 
 
+def _warp() -> ModuleType:
+    """The ``warp`` module (imported on first use)."""
+    import warp
+
+    return warp
+
+
+def _funcs() -> ModuleType:
+    """The kernel module (imports Warp)."""
+    from drive_envelope._src.kernels import warp_funcs
+
+    return warp_funcs
+
+
 def _is_warp_array(value: object) -> bool:
-    return bool(isinstance(value, warp_module().array))
+    return bool(isinstance(value, _warp().array))
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class EnvelopeArrays:
     """Per-DOF envelope parameters of ``N`` DOFs as Warp float32 arrays of shape ``(N,)``, one device.
 
-    Build it with :meth:`from_envelopes` or :meth:`from_numpy` (which validate the values); the
+    Build it with :meth:`from_envelopes` or :meth:`from_values` (which validate the values); the
     constructor itself checks shapes, dtypes and devices only.
     """
 
@@ -53,7 +70,7 @@ class EnvelopeArrays:
     """``speedEffortGradient`` per DOF [(rad/s)/(N*m) or (m/s)/N]."""
 
     def __post_init__(self) -> None:
-        wp = warp_module()
+        wp = _warp()
         arrays = [getattr(self, name) for name in ENVELOPE_FIELDS]
         for name, array in zip(ENVELOPE_FIELDS, arrays, strict=True):
             if not _is_warp_array(array) or array.dtype != wp.float32 or array.ndim != 1:
@@ -86,30 +103,28 @@ class EnvelopeArrays:
 
         Args:
             envelopes: One envelope per DOF, or a single envelope repeated ``count`` times.
-            count: Number of DOFs when ``envelopes`` is a single envelope.
+            count: Number of DOFs when ``envelopes`` is a single envelope (required then).
             device: Warp device (default: Warp's current device).
         """
-        if isinstance(envelopes, PerformanceEnvelope):
-            if count is None or count < 1:
-                raise InputError(
-                    f"count: expected a number of DOFs >= 1 for a single envelope, got {count!r}"
-                )
-            envelopes = [envelopes] * count
-        values = {name: [getattr(env, name) for env in envelopes] for name in ENVELOPE_FIELDS}
-        return cls._upload(values, device)
+        if isinstance(envelopes, PerformanceEnvelope) and count is None:
+            raise InputError("EnvelopeArrays.from_envelopes: count: expected a number of DOFs >= 1, got None")
+        return cls._upload(envelope_columns(envelopes, count, "EnvelopeArrays.from_envelopes"), device)
 
     @classmethod
-    def from_numpy(
+    def from_values(
         cls,
         *,
-        max_effort: npt.ArrayLike,
-        max_actuator_velocity: npt.ArrayLike = math.inf,
-        velocity_dependent_resistance: npt.ArrayLike = 0.0,
-        speed_effort_gradient: npt.ArrayLike = 0.0,
+        max_effort: Any,
+        max_actuator_velocity: Any = math.inf,
+        velocity_dependent_resistance: Any = 0.0,
+        speed_effort_gradient: Any = 0.0,
         count: int | None = None,
         device: Any = None,
     ) -> EnvelopeArrays:
-        """Validate per-DOF SI values (scalars broadcast) on the host, then upload them.
+        """Validate per-DOF values (scalars broadcast) on the host, then upload them.
+
+        Each value is an SI number, a sequence or NumPy array of them, or a string with units
+        (``"inf"``, ``"300 rpm"``) read like every other user value.
 
         Args:
             max_effort: [N*m or N], ``>= 0``, finite.
@@ -120,38 +135,31 @@ class EnvelopeArrays:
             device: Warp device (default: Warp's current device).
 
         Raises:
-            InputError: a negative, NaN or (except ``max_actuator_velocity``) infinite value, or
-                shapes that do not broadcast to ``(N,)``.
+            InputError: a negative, NaN or (except ``max_actuator_velocity``) infinite value, a
+                wrong unit, or shapes that do not broadcast to ``(N,)``.
         """
-        given = {
-            "max_effort": max_effort,
-            "max_actuator_velocity": max_actuator_velocity,
-            "velocity_dependent_resistance": velocity_dependent_resistance,
-            "speed_effort_gradient": speed_effort_gradient,
-        }
-        raw = {name: np.asarray(value, dtype=np.float64) for name, value in given.items()}
+        where = "EnvelopeArrays.from_values"
+        raw = read_envelope_values(
+            {
+                "max_effort": max_effort,
+                "max_actuator_velocity": max_actuator_velocity,
+                "velocity_dependent_resistance": velocity_dependent_resistance,
+                "speed_effort_gradient": speed_effort_gradient,
+            },
+            where,
+        )
         try:
             shape = np.broadcast_shapes(*(a.shape for a in raw.values()), (count,) if count else ())
         except ValueError:
             shapes = ", ".join(f"{n}={a.shape}" for n, a in raw.items())
-            raise InputError(f"EnvelopeArrays.from_numpy: shapes do not broadcast ({shapes})") from None
+            raise InputError(f"{where}: shapes do not broadcast ({shapes})") from None
         if len(shape) != 1:
-            raise InputError(
-                f"EnvelopeArrays.from_numpy: expected per-DOF values of shape (N,), got shape {shape}"
-            )
-        for name, array in raw.items():
-            bad = np.isnan(array) | (array < 0.0)
-            if name != "max_actuator_velocity":
-                bad |= np.isinf(array)
-            if np.any(bad):
-                value = array[bad].flat[0]
-                expected = ">= 0" if name == "max_actuator_velocity" else ">= 0 and finite"
-                raise InputError(f"EnvelopeArrays.from_numpy: {name} = {value!r}; expected {expected}")
+            raise InputError(f"{where}: expected per-DOF values of shape (N,), got shape {shape}")
         return cls._upload({n: np.broadcast_to(a, shape) for n, a in raw.items()}, device)
 
     @classmethod
     def _upload(cls, values: dict[str, Any], device: Any) -> EnvelopeArrays:
-        wp = warp_module()
+        wp = _warp()
         arrays = {
             name: wp.array(np.ascontiguousarray(value, dtype=np.float32), dtype=wp.float32, device=device)
             for name, value in values.items()
@@ -165,7 +173,7 @@ class EnvelopeArrays:
 
 def _as_array(value: object, count: int, device: Any, where: str) -> Any:
     """A float32 Warp array of shape ``(count,)`` on ``device``: Warp arrays are checked, others uploaded."""
-    wp = warp_module()
+    wp = _warp()
     if _is_warp_array(value):
         array: Any = value
         if array.dtype != wp.float32 or array.shape != (count,):
@@ -182,10 +190,16 @@ def _as_array(value: object, count: int, device: Any, where: str) -> Any:
 
 
 def _output(out: Any, count: int, device: Any) -> Any:
-    wp = warp_module()
     if out is None:
+        wp = _warp()
         return wp.empty(count, dtype=wp.float32, device=device)
     return _as_array(out, count, device, "out")
+
+
+def _check_params(params: object) -> EnvelopeArrays:
+    if not isinstance(params, EnvelopeArrays):
+        raise InputError(f"params: expected an EnvelopeArrays, got {type(params).__name__}")
+    return params
 
 
 def effort_limit(params: EnvelopeArrays, velocity: Any, *, out: Any = None) -> Any:
@@ -199,11 +213,11 @@ def effort_limit(params: EnvelopeArrays, velocity: Any, *, out: Any = None) -> A
     Returns:
         The limit [N*m or N], float32 Warp array ``(N,)`` on ``params.device``.
     """
-    wp, k = warp_module(), build()
+    params = _check_params(params)
     n, device = params.count, params.device
     result = _output(out, n, device)
-    inputs = [_as_array(velocity, n, device, "velocity"), *params.as_inputs()]
-    wp.launch(k.effort_limit_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    inputs = [*params.as_inputs(), _as_array(velocity, n, device, "velocity")]
+    _warp().launch(_funcs()._effort_limit_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
     return result
 
 
@@ -219,15 +233,15 @@ def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any
     Returns:
         Clamped effort [N*m or N], float32 Warp array ``(N,)``.
     """
-    wp, k = warp_module(), build()
+    params = _check_params(params)
     n, device = params.count, params.device
     result = _output(out, n, device)
     inputs = [
+        *params.as_inputs(),
         _as_array(effort, n, device, "effort"),
         _as_array(velocity, n, device, "velocity"),
-        *params.as_inputs(),
     ]
-    wp.launch(k.clamp_effort_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    _warp().launch(_funcs()._clamp_effort_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
     return result
 
 
@@ -253,6 +267,8 @@ def clamp_effort_implicit(
 ) -> Any:
     """PhysX's implicit clamp per DOF, in effort units (the batched core ``clamp_effort_implicit``).
 
+    Guarded like the core: ``|result| <= max_effort`` for every finite input, never NaN.
+
     Args:
         params: Per-DOF envelopes (``N`` DOFs).
         requested_effort: Requested total actuator effort [N*m or N].
@@ -265,19 +281,20 @@ def clamp_effort_implicit(
     Returns:
         Clamped total effort [N*m or N], float32 Warp array ``(N,)``.
     """
-    wp, k = warp_module(), build()
+    params = _check_params(params)
     step = _check_dt(dt)
     n, device = params.count, params.device
     result = _output(out, n, device)
     inputs = [
+        *params.as_inputs(),
         _as_array(requested_effort, n, device, "requested_effort"),
         _as_array(velocity, n, device, "velocity"),
         _as_array(response, n, device, "response"),
-        _as_array(applied_effort, n, device, "applied_effort"),
         step,
-        *params.as_inputs(),
+        _as_array(applied_effort, n, device, "applied_effort"),
     ]
-    wp.launch(k.clamp_effort_implicit_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    kernel = _funcs()._clamp_effort_implicit_kernel
+    _warp().launch(kernel, dim=n, inputs=inputs, outputs=[result], device=device)
     return result
 
 
@@ -292,12 +309,14 @@ def clamp_drive_impulse(
     velocity_dependent_resistance: Any,
     *,
     dtype: npt.DTypeLike = np.float32,
+    physx_exact: bool = False,
 ) -> Any:
     """PhysX ``clampDriveImpulse`` on Warp, the core's signature and argument order.
 
     Arguments are Warp float32 arrays (one device, one shape ``(N,)``), NumPy arrays or scalars;
     they broadcast together. The device is that of the Warp arrays given, else Warp's current
-    device. See :func:`drive_envelope.clamp_drive_impulse` for the meaning and units.
+    device. See :func:`drive_envelope.clamp_drive_impulse` for the meaning, the units and the two
+    modes.
 
     Args:
         joint_vel0: Joint velocity containing ``drive_impulse0`` [rad/s or m/s].
@@ -309,12 +328,13 @@ def clamp_drive_impulse(
         speed_impulse_gradient: ``speedEffortGradient / dt`` [(rad/s)/(N*m*s) or (m/s)/(N*s)].
         velocity_dependent_resistance: ``velocityDependentResistance * dt`` [N*m*s/rad or N*s/m].
         dtype: Only ``numpy.float32``: Warp computes in float32, as PhysX does.
+        physx_exact: Reproduce PhysX's arithmetic bit for bit (default: the effort cap kept).
 
     Returns:
         The clamped impulse [N*m*s or N*s]: a float32 Warp array of the broadcast shape, ``(1,)``
         when every argument is a scalar (``numpy.asarray`` or ``.numpy()`` reads it).
     """
-    wp, k = warp_module(), build()
+    wp = _warp()
     if np.dtype(dtype) != np.float32:
         raise InputError(f"dtype: the Warp backend computes in float32 like PhysX, got {np.dtype(dtype)}")
     values = (
@@ -341,12 +361,12 @@ def clamp_drive_impulse(
     inputs = [_as_array(v, n, device, name) for v, name in zip(values, CLAMP_DRIVE_IMPULSE_ARGS, strict=True)]
     result = wp.empty(n, dtype=wp.float32, device=device)
     if n:
-        wp.launch(k.clamp_drive_impulse_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+        kernel = _funcs()._clamp_drive_impulse_kernel
+        wp.launch(kernel, dim=n, inputs=[*inputs, bool(physx_exact)], outputs=[result], device=device)
     # Warp has no 0-d arrays: all-scalar arguments give shape (1,)
     return result.reshape(shape) if len(shape) > 1 else result
 
 
 def copy(src: Any, dst: Any) -> None:
     """``dst[:] = src`` with a one-line kernel: the bandwidth baseline of the benchmarks."""
-    wp, k = warp_module(), build()
-    wp.launch(k.copy_kernel, dim=src.shape[0], inputs=[src], outputs=[dst], device=src.device)
+    _warp().launch(_funcs()._copy_kernel, dim=src.shape[0], inputs=[src], outputs=[dst], device=src.device)

@@ -18,7 +18,8 @@ import numpy as np
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.torch_ops import clamp_effort, resolve_dtype
+from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors, resolve_dtype
+from drive_envelope._src.kernels.torch_ops import clamp_effort
 from drive_envelope._src.values import read_envelope_value
 
 if TYPE_CHECKING:
@@ -138,6 +139,8 @@ class EnvelopeActuator:
             name: self._per_joint(cfg, name, torch.device(device), kind)
             for name in ("stiffness", "damping", *ENVELOPE_FIELDS)
         }
+        self.envelope = EnvelopeTensors(**{name: self._params[name] for name in ENVELOPE_FIELDS})
+        """The envelope per joint, tensors of shape ``(1, num_joints)``."""
         self.computed_effort = torch.zeros(num_envs, num_joints, dtype=kind, device=device)
         """PD effort before the clip [N*m or N], ``(num_envs, num_joints)``."""
         self.applied_effort = torch.zeros_like(self.computed_effort)
@@ -183,12 +186,5 @@ class EnvelopeActuator:
         if feedforward is not None:
             effort.add_(feedforward)
         self.computed_effort = effort
-        self.applied_effort = clamp_effort(
-            effort,
-            joint_vel,
-            p["max_effort"],
-            p["max_actuator_velocity"],
-            p["velocity_dependent_resistance"],
-            p["speed_effort_gradient"],
-        )
+        self.applied_effort = clamp_effort(self.envelope, effort, joint_vel)
         return self.applied_effort

@@ -13,8 +13,10 @@ limit ``L(v) = max(min(max_effort - R|v|, (v_max - |v|)/G), 0)``:
   that fixed point is the boundary point PhysX's ``clampDriveImpulse`` returns (largest feasible
   effort along the request), and with zero feasible effort both give 0 (the drive lets go).
 
-Only Newton's public API is used (``newton.actuators.ClampingBase``). Newton and Warp are imported
-in :func:`build`, so this module can be imported without them.
+Only Newton's public API is used (``newton.actuators.ClampingBase``). Both modes evaluate the shared
+Warp building block ``clamp_effort_func`` (``drive_envelope._src.kernels.warp_funcs``), float32 in
+``modify_forces`` and float64 in ``evaluate_clamp``: one formula, one NaN rule. Newton and Warp are
+imported in :func:`build`, so this module can be imported without them.
 
 Where it differs from Newton's ``ClampingDCMotor`` (``sat``, ``v_lim``, ``max_e``): with
 ``max_actuator_velocity = v_lim``, ``speed_effort_gradient = v_lim / sat``, ``R = 0`` the two agree
@@ -78,9 +80,10 @@ def build() -> type:
     import warp as wp
     from newton.actuators import ClampingBase
 
-    from drive_envelope._src.kernels.warp_funcs import build as build_warp
+    from drive_envelope._src.kernels import warp_funcs
 
-    clamp_effort_func = build_warp().clamp_effort_func
+    # the shared building block, generic: float32 in modify_forces, float64 inside the implicit solve
+    clamp_effort_func = warp_funcs.clamp_effort_func
 
     @wp.func
     def _evaluate_envelope_clamp(
@@ -94,20 +97,18 @@ def build() -> type:
         """Implicit-solve entry point; params row is ``[max_effort, v_max, R, G]``.
 
         ``qd`` is the predicted end-of-step velocity, so ``|effort| <= L(qd)`` holds at the end of
-        the step: L(v) = max(min(max_effort - R|v|, (v_max - |v|)/G), 0).
+        the step: clip(value, -L(qd), L(qd)), L(v) = max(min(max_effort - R|v|, (v_max - |v|)/G), 0).
+        The float32 parameters are widened to float64 (exactly) so that one generic function serves
+        both stages: Warp's generic functions need one type per call, it does not promote.
         """
-        max_e = wp.float64(params[i, base])
-        max_v = wp.float64(params[i, base + 1])
-        resist = wp.float64(params[i, base + 2])
-        grad = wp.float64(params[i, base + 3])
-        speed = wp.abs(qd)
-        limit = max_e - resist * speed
-        if grad > wp.float64(0.0):
-            limit = wp.min(limit, (max_v - speed) / grad)
-        elif speed > max_v:
-            limit = wp.float64(0.0)
-        limit = wp.max(limit, wp.float64(0.0))
-        return wp.clamp(value, -limit, limit)
+        return clamp_effort_func(
+            wp.float64(params[i, base]),
+            wp.float64(params[i, base + 1]),
+            wp.float64(params[i, base + 2]),
+            wp.float64(params[i, base + 3]),
+            value,
+            qd,
+        )
 
     @wp.kernel(enable_backward=False)
     def _clamp_envelope_kernel(
@@ -123,12 +124,12 @@ def build() -> type:
         """dst[i] = clip(src[i], -L_i(v), L_i(v)) at the measured velocity v of DOF i."""
         i = wp.tid()
         dst[i] = clamp_effort_func(
-            src[i],
-            current_vel[state_indices[i]],
             max_effort[i],
             max_actuator_velocity[i],
             velocity_dependent_resistance[i],
             speed_effort_gradient[i],
+            src[i],
+            current_vel[state_indices[i]],
         )
 
     class ClampingPerformanceEnvelope(ClampingBase):  # type: ignore[misc,valid-type]

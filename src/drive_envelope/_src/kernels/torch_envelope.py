@@ -1,0 +1,198 @@
+"""``EnvelopeTensors``: the envelope parameters as four torch tensors, beside Warp's ``EnvelopeArrays``.
+
+Values are validated on the host when built from envelopes or values; the constructor itself only
+checks that the four are float tensors of one dtype and one device whose shapes broadcast (a
+``(num_envs, num_joints)`` layout, a ``(1, num_joints)`` row, a ``(N,)`` column or 0-d scalars).
+torch is imported on first use.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
+
+if TYPE_CHECKING:
+    import torch
+
+__all__ = ["EnvelopeTensors", "resolve_dtype"]
+
+
+def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
+    """The torch float dtype to compute in: ``dtype``, else that of the first float tensor, else float32.
+
+    Args:
+        dtype: ``None``, a torch float dtype, or a NumPy float dtype (``numpy.float32``/``float64``).
+        values: The arguments, searched for a floating tensor when ``dtype`` is None.
+    """
+    import torch
+
+    if dtype is None:
+        for value in values:
+            if isinstance(value, torch.Tensor) and value.is_floating_point():
+                return value.dtype
+        return torch.float32
+    if isinstance(dtype, torch.dtype):
+        if not dtype.is_floating_point:
+            raise InputError(f"dtype: expected a float dtype, got {dtype}")
+        return dtype
+    try:
+        name = np.dtype(dtype).name
+    except TypeError:
+        raise InputError(
+            f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}"
+        ) from None
+    mapping = {"float16": torch.float16, "float32": torch.float32, "float64": torch.float64}
+    if name not in mapping:
+        raise InputError(f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}")
+    return mapping[name]
+
+
+def _host(value: object) -> object:
+    """A tensor's values as a NumPy array (validation reads them once, on the host); others as given."""
+    import torch
+
+    if isinstance(value, torch.Tensor):
+        return value.detach().cpu().numpy()
+    return value
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class EnvelopeTensors:
+    """The four envelope parameters as torch tensors of one float dtype on one device.
+
+    Shapes broadcast together and with the states the ops get, e.g. ``(num_envs, num_joints)`` or
+    ``(1, num_joints)``. Build it with :meth:`from_envelopes` or :meth:`from_values`, which validate
+    the values; the constructor checks dtypes, devices and shapes only.
+    """
+
+    max_effort: Any
+    """``maxEffort`` [N*m or N], a float tensor."""
+    max_actuator_velocity: Any
+    """``maxActuatorVelocity`` [rad/s or m/s] (``inf``: no speed limit)."""
+    velocity_dependent_resistance: Any
+    """``velocityDependentResistance`` [N*m*s/rad or N*s/m]."""
+    speed_effort_gradient: Any
+    """``speedEffortGradient`` [(rad/s)/(N*m) or (m/s)/N]."""
+
+    def __post_init__(self) -> None:
+        import torch
+
+        tensors = [getattr(self, name) for name in ENVELOPE_FIELDS]
+        for name, tensor in zip(ENVELOPE_FIELDS, tensors, strict=True):
+            if not isinstance(tensor, torch.Tensor) or not tensor.is_floating_point():
+                raise InputError(f"EnvelopeTensors.{name}: expected a float torch.Tensor, got {tensor!r}")
+        if len({t.dtype for t in tensors}) != 1 or len({t.device for t in tensors}) != 1:
+            kinds = ", ".join(
+                f"{n}={t.dtype} on {t.device}" for n, t in zip(ENVELOPE_FIELDS, tensors, strict=True)
+            )
+            raise InputError(f"EnvelopeTensors: expected one dtype and one device, got {kinds}")
+        try:
+            torch.broadcast_shapes(*(t.shape for t in tensors))
+        except RuntimeError:
+            shapes = ", ".join(f"{n}={tuple(t.shape)}" for n, t in zip(ENVELOPE_FIELDS, tensors, strict=True))
+            raise InputError(f"EnvelopeTensors: shapes do not broadcast ({shapes})") from None
+
+    @property
+    def dtype(self) -> torch.dtype:
+        """The float dtype of the four tensors."""
+        return self.max_effort.dtype  # type: ignore[no-any-return]
+
+    @property
+    def device(self) -> torch.device:
+        """The device of the four tensors."""
+        return self.max_effort.device  # type: ignore[no-any-return]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The broadcast shape of the four tensors."""
+        import torch
+
+        return tuple(torch.broadcast_shapes(*(t.shape for t in self.as_tuple())))
+
+    def as_tuple(self) -> tuple[Any, Any, Any, Any]:
+        """``(max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient)``."""
+        return (
+            self.max_effort,
+            self.max_actuator_velocity,
+            self.velocity_dependent_resistance,
+            self.speed_effort_gradient,
+        )
+
+    @classmethod
+    def from_envelopes(
+        cls,
+        envelopes: PerformanceEnvelope | Sequence[PerformanceEnvelope],
+        *,
+        count: int | None = None,
+        device: Any = "cpu",
+        dtype: Any = None,
+    ) -> EnvelopeTensors:
+        """Pack envelopes (already validated) into tensors.
+
+        Args:
+            envelopes: One envelope per DOF (tensors of shape ``(N,)``), or a single envelope: 0-d
+                tensors that broadcast against any state, or ``(count,)`` when ``count`` is given.
+            count: Number of DOFs for a single envelope.
+            device: Torch device.
+            dtype: Float dtype (torch or NumPy; default float32).
+        """
+        return cls._build(envelope_columns(envelopes, count, "EnvelopeTensors.from_envelopes"), device, dtype)
+
+    @classmethod
+    def from_values(
+        cls,
+        *,
+        max_effort: Any,
+        max_actuator_velocity: Any = math.inf,
+        velocity_dependent_resistance: Any = 0.0,
+        speed_effort_gradient: Any = 0.0,
+        device: Any = "cpu",
+        dtype: Any = None,
+    ) -> EnvelopeTensors:
+        """Validate values of any shapes that broadcast together, then build the tensors.
+
+        Each value is an SI number, a sequence, NumPy array or tensor of them (a tensor is read back
+        once to be checked), or a string with units (``"inf"``, ``"300 rpm"``).
+
+        Args:
+            max_effort: [N*m or N], ``>= 0``, finite.
+            max_actuator_velocity: [rad/s or m/s], ``>= 0`` (``inf`` allowed).
+            velocity_dependent_resistance: [N*m*s/rad or N*s/m], ``>= 0``, finite.
+            speed_effort_gradient: [(rad/s)/(N*m) or (m/s)/N], ``>= 0``, finite.
+            device: Torch device.
+            dtype: Float dtype (torch or NumPy; default float32).
+
+        Raises:
+            InputError: a negative, NaN or (except ``max_actuator_velocity``) infinite value, a
+                wrong unit, or shapes that do not broadcast.
+        """
+        given = {
+            "max_effort": max_effort,
+            "max_actuator_velocity": max_actuator_velocity,
+            "velocity_dependent_resistance": velocity_dependent_resistance,
+            "speed_effort_gradient": speed_effort_gradient,
+        }
+        where = "EnvelopeTensors.from_values"
+        values = read_envelope_values({n: _host(v) for n, v in given.items()}, where)
+        try:
+            np.broadcast_shapes(*(a.shape for a in values.values()))
+        except ValueError:
+            shapes = ", ".join(f"{n}={a.shape}" for n, a in values.items())
+            raise InputError(f"{where}: shapes do not broadcast ({shapes})") from None
+        return cls._build(values, device, dtype)
+
+    @classmethod
+    def _build(cls, values: dict[str, Any], device: Any, dtype: Any) -> EnvelopeTensors:
+        import torch
+
+        kind = resolve_dtype(dtype)
+        target = torch.device(device)
+        return cls(**{n: torch.as_tensor(np.array(a), dtype=kind, device=target) for n, a in values.items()})
