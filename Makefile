@@ -4,16 +4,20 @@
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-# every optional engine CI exercises; torch is opt-in (`make test-torch`, see README)
-EXTRAS ?= test,all
+# every optional engine CI exercises, torch and the Isaac Lab adapter's needs included
+EXTRAS ?= test,all,isaaclab
+# Isaac Lab's PyPI wheel pins numpy<2 and Isaac Sim: install it without its dependencies (the
+# adapter needs only isaaclab.actuators, whose imports the `isaaclab` extra provides)
+ISAACLAB ?= isaaclab==2.3.2.post1
 STAMP := $(VENV)/.installed-$(subst ,,$(EXTRAS))
 
-.PHONY: setup demo test lint typecheck pytest test-torch bench clean
+.PHONY: setup demo test lint typecheck pytest bench clean
 
 $(STAMP): pyproject.toml Makefile
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --disable-pip-version-check --upgrade pip
 	$(BIN)/python -m pip install -q --disable-pip-version-check -e '.[$(EXTRAS)]'
+	$(BIN)/python -m pip install -q --disable-pip-version-check --no-deps '$(ISAACLAB)'
 	touch $@
 
 # the native MuJoCo actuator plugin, built against the installed mujoco wheel's headers and library
@@ -44,16 +48,8 @@ pytest: setup
 
 test: lint typecheck pytest
 
-# opt-in: the default PyPI torch wheel pulls ~3 GB of CUDA libraries (5.5 GB venv), so torch gets
-# its own virtual environment and its own target instead of slowing every `make test`
-TORCH_VENV := .venv-torch
-test-torch:
-	test -x $(TORCH_VENV)/bin/python || $(PYTHON) -m venv $(TORCH_VENV)
-	$(TORCH_VENV)/bin/python -m pip install -q --disable-pip-version-check -e '.[test,torch]'
-	$(TORCH_VENV)/bin/python -m pytest -q -m torch
-
 bench: setup
 	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) $(TORCH_VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
+	rm -rf $(VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
