@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -40,7 +41,7 @@ def _env(**kwargs: Any) -> PerformanceEnvelope:
     return PerformanceEnvelope(**{"max_effort": 8.0, "max_actuator_velocity": 4.0, **kwargs})
 
 
-def test_add_drive_builds_a_model_that_round_trips_through_mjcf(mujoco: Any) -> None:
+def test_add_drive_builds_a_model_that_round_trips_through_mjcf(mujoco: Any, tmp_path: Path) -> None:
     """Add drives from an envelope and a catalog datasheet; the saved MJCF compiles to the same model."""
     from drive_envelope.mujoco import add_drive
 
@@ -59,11 +60,23 @@ def test_add_drive_builds_a_model_that_round_trips_through_mjcf(mujoco: Any) -> 
     assert shoulder.actuators == ("shoulder",)
     assert elbow.actuators == ("elbow", "elbow_vel", "elbow_ff")
     assert elbow.envelope.max_effort == pytest.approx(12.0)
+    # one instance per input set, shared by every drive with those inputs
+    assert (shoulder.instance, elbow.instance) == ("drive_envelope_pos", "drive_envelope_pos_vel_ff")
     assert model.nu == 4 and model.nplugin == 2 and model.nsensor == 2
-    again = mujoco.MjModel.from_xml_string(spec.to_xml())
-    assert again.nu == model.nu
+    # the numbers live in the effort actuator's dynprm: envelope, then gains (inf speed as -1)
+    assert model.actuator_dynprm[0, :6].tolist() == [8.0, 4.0, 0.5, 0.0, 80.0, 2.0]
+    assert model.actuator_dynprm[1, :2].tolist() == [12.0, elbow.envelope.max_actuator_velocity]
     text = spec.to_xml()
+    again = mujoco.MjModel.from_xml_string(text)
+    assert again.nu == model.nu
+    np.testing.assert_allclose(
+        again.actuator_dynprm, model.actuator_dynprm, rtol=1e-5
+    )  # MuJoCo writes 6 digits
     assert 'plugin="drive_envelope.envelope"' in text and 'key="input" value="pos vel ff"' in text
+    from drive_envelope.mujoco import write_mjcf
+
+    exact = write_mjcf(spec, tmp_path / "arm.xml")  # every digit, and checked to load
+    np.testing.assert_array_equal(exact.actuator_dynprm, model.actuator_dynprm)
 
 
 def test_add_drive_refuses_bad_joints_and_arguments(mujoco: Any) -> None:
@@ -85,6 +98,15 @@ def test_add_drive_refuses_bad_joints_and_arguments(mujoco: Any) -> None:
         add_drive(spec, "shoulder", envelope=_env(), stiffness=1, damping=1, inputs=("pos", "torque"))
     with pytest.raises(InputError, match="exactly one of"):
         add_drive(spec, "shoulder", stiffness=1, damping=1)
+    with pytest.raises(InputError, match=r"argument 'stiffness': expected a number in \[0, 1e12\]"):
+        add_drive(spec, "shoulder", envelope=_env(), stiffness=1e308, damping=1)
+    with pytest.raises(InputError, match=r"max_effort = 1e\+20: expected a number in \[0, 1e12\]"):
+        add_drive(spec, "shoulder", envelope=PerformanceEnvelope(max_effort=1e20), stiffness=1, damping=1)
+    add_drive(spec, "shoulder", envelope=_env(), stiffness=1, damping=1)
+    with pytest.raises(
+        InputError, match=r"joint 'shoulder' already has actuator 'shoulder' \(drive\).*replace=True"
+    ):
+        add_drive(spec, "shoulder", envelope=_env(), stiffness=1, damping=1)
 
 
 def test_operating_points_stay_inside_the_envelope_or_let_go(mujoco: Any) -> None:
@@ -157,8 +179,8 @@ def test_add_drives_shares_one_instance_and_matches_single_drives(mujoco: Any) -
         shared_spec, ["shoulder", "elbow"], envelope=env, stiffness=50, damping=1, inputs="pos vel"
     )
     for joint in ("shoulder", "elbow"):
-        add_drive(single_spec, joint, envelope=env, stiffness=50, damping=1, inputs="pos vel")
-    assert {d.instance for d in shared} == {"drives_shoulder"}
+        add_drive(single_spec, joint, envelope=env, stiffness=50, damping=1, inputs="pos vel", instance=joint)
+    assert {d.instance for d in shared} == {"drive_envelope_pos_vel"}
     runs = []
     for spec in (shared_spec, single_spec):
         model = spec.compile()
@@ -182,50 +204,11 @@ def test_quadruped_example_stays_inside_its_envelopes(mujoco: Any) -> None:
     finally:
         sys.path.pop(0)
     trajectories = quadruped.run(seconds=0.6)
-    limits = quadruped.envelopes()
+    checks = quadruped.checks(trajectories)
     assert len(trajectories) == 12
-    for name, traj in trajectories.items():
-        inside = limits[name].contains(traj.velocity, traj.effort, atol=1e-9) | (traj.effort == 0.0)
-        assert inside.all(), name
-    assert "inside" in quadruped.summary(trajectories)
-
-
-def test_quadruped_efforts_match_dense_numpy_computation(mujoco: Any) -> None:
-    """Reproduce all 12 efforts of the floating-base quadruped from the dense M^-1 and the core."""
-    from pathlib import Path
-
-    from drive_envelope import clamp_effort_implicit, implicit_drive_effort
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples" / "mujoco"))
-    try:
-        import quadruped
-    finally:
-        sys.path.pop(0)
-    model = quadruped.build_quadruped("plugin").compile()
-    data = mujoco.MjData(model)
-    names = quadruped.joint_names()
-    joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names]
-    data.qpos[model.jnt_qposadr[joints]] = quadruped.targets(0.0)
-    for _ in range(300):  # walk into a loaded, moving state with foot contacts
-        data.ctrl[:] = quadruped.targets(data.time)
-        mujoco.mj_step(model, data)
-    mujoco.mj_forward(model, data)
-    dense = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, data, dense)
-    inverse = np.linalg.inv(dense)
-    acceleration = inverse @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_applied)
-    dt, limits = model.opt.timestep, quadruped.envelopes()
-    for index, (name, joint) in enumerate(zip(names, joints, strict=True)):
-        dof = model.jnt_dofadr[joint]
-        r, v0 = inverse[dof, dof], data.qvel[dof] + dt * acceleration[dof]
-        stiffness, damping = quadruped.GAINS[name.split("_", 1)[1]]
-        error = data.ctrl[index] - data.qpos[model.jnt_qposadr[joint]]
-        drive = implicit_drive_effort(
-            stiffness=stiffness, damping=damping, position_error=error, velocity=v0,
-            target_velocity=0.0, response=r, dt=dt,
-        )  # fmt: skip
-        expected = float(clamp_effort_implicit(limits[name], drive, v0, r, dt))
-        assert data.actuator_force[index] == pytest.approx(expected, rel=1e-9, abs=1e-12), name
+    assert sum(c.samples_outside for c in checks.values()) == 0
+    summary = quadruped.summary(trajectories)
+    assert "all joints: 0 of 3600 samples outside the envelope (0.000 %), 0 released" in summary
 
 
 def test_wheel_ships_every_plugin_source() -> None:
@@ -246,3 +229,75 @@ def test_wheel_ships_every_plugin_source() -> None:
     shipped = config["tool"]["hatch"]["build"]["targets"]["wheel"]["force-include"]
     assert set(PLUGIN_SOURCES) == on_disk
     assert shipped == {f"plugin/mujoco/{n}": f"drive_envelope/_plugin/mujoco/{n}" for n in PLUGIN_SOURCES}
+
+
+MOTORS = """<mujoco><compiler angle="radian"/><option timestep="0.005"/><worldbody>
+<body pos="0 0 1"><joint name="hip" axis="0 1 0" range="-1 2"/>
+<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="knee" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="toe" axis="0 1 0"/><geom type="sphere" size="0.03"/>
+</body></body></body></worldbody>
+<actuator><motor name="hip_motor" joint="hip" ctrlrange="-20 20"/>
+<position name="knee_pos" joint="knee" kp="50" kv="2"/><motor name="knee_extra" joint="knee"/>
+<velocity name="toe_vel" joint="toe" kv="3"/><motor name="other" joint="toe"/>
+</actuator><keyframe><key name="k" qpos="0.5 -0.3 0.1" ctrl="7 -0.3 1 0.2 4"/></keyframe></mujoco>"""
+
+
+def test_replace_converts_the_first_actuator_in_place_and_fixes_keyframes(mujoco: Any) -> None:
+    """Keep the replaced actuator's name and ctrl slot, delete the others, rewrite keyframe controls."""
+    from drive_envelope.mujoco import add_drive
+
+    spec = mujoco.MjSpec.from_string(MOTORS)
+    hip = add_drive(spec, "hip", envelope=_env(), stiffness=30, damping=1, replace=True, effort_sensor=False)
+    knee = add_drive(
+        spec, "knee", envelope=_env(), stiffness=50, damping=2, replace=True, effort_sensor=False
+    )
+    assert (hip.name, hip.replaced) == ("hip_motor", ("hip_motor",))
+    assert (knee.name, knee.replaced) == ("knee_pos", ("knee_pos", "knee_extra"))
+    model = spec.compile()
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(model.nu)]
+    assert names == ["hip_motor", "knee_pos", "toe_vel", "other"]
+    # the motor's torque 7 became the key's hip position; the deleted knee_extra's column is gone
+    np.testing.assert_allclose(model.key_ctrl[0], [0.5, -0.3, 0.2, 4.0])
+    # a motor's control range (a torque) became the joint's range (a target position)
+    np.testing.assert_allclose(model.actuator_ctrlrange[0], [-1.0, 2.0])
+    assert (
+        model.actuator_plugin[0] >= 0 and model.actuator_plugin[1] >= 0 and not model.actuator_forcelimited[1]
+    )
+
+
+def test_replace_keeps_what_the_replaced_actuator_knew(mujoco: Any) -> None:
+    """Describe a joint's existing actuators: position gains, velocity gain, motors."""
+    from drive_envelope._src.adapters.mujoco.existing import joint_actuators
+
+    spec = mujoco.MjSpec.from_string(MOTORS)
+    knee = joint_actuators(spec, "knee")
+    assert [(a.name, a.kind, a.stiffness, a.damping) for a in knee] == [
+        ("knee_pos", "position", 50.0, 2.0),
+        ("knee_extra", "motor", None, None),
+    ]
+    assert [(a.kind, a.stiffness, a.damping) for a in joint_actuators(spec, "toe")] == [
+        ("velocity", 0.0, 3.0),
+        ("motor", None, None),
+    ]
+
+
+def test_model_drives_lists_every_drive_with_its_numbers(mujoco: Any) -> None:
+    """List drives of a compiled model: effort actuator, joint, inputs, envelope, gains."""
+    from drive_envelope.mujoco import add_drive, model_drives
+
+    spec = mujoco.MjSpec.from_string(ARM)
+    add_drive(spec, "shoulder", envelope=_env(speed_effort_gradient=0.1), stiffness=80, damping=2)
+    add_drive(
+        spec, "elbow", envelope=PerformanceEnvelope(max_effort=3.0), stiffness=9, damping=1, inputs="pos ff"
+    )
+    drives = model_drives(spec.compile())
+    assert [(d.name, d.joint, d.inputs) for d in drives] == [
+        ("shoulder", "shoulder", ("pos",)),
+        ("elbow", "elbow", ("pos", "ff")),
+    ]
+    assert drives[0].envelope == PerformanceEnvelope(
+        max_effort=8.0, max_actuator_velocity=4.0, speed_effort_gradient=0.1, name="shoulder"
+    )
+    assert drives[1].envelope is not None and drives[1].envelope.max_actuator_velocity == float("inf")
+    assert (drives[1].stiffness, drives[1].damping, drives[1].dynprm[1]) == (9.0, 1.0, -1.0)

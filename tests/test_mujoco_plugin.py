@@ -1,14 +1,17 @@
-"""The ``drive_envelope.envelope`` MuJoCo plugin through the Python bindings.
+"""The ``drive_envelope.envelope`` MuJoCo plugin through the Python bindings: one drive at a time.
 
 Golden numbers are computed by hand from the spec (first-step effort ``tau_max/(1 + r*R*dt)``, the
 velocity settling on ``max_actuator_velocity``) or independently in NumPy from MuJoCo's dense mass
-matrix and the core functions (multi-DOF response and smooth forces).
+matrix and the core functions (multi-DOF response and smooth forces). The coupled solve of several
+drives is in ``test_mujoco_coupled.py``; MuJoCo's actuator features (delay, groups) and the model-side
+numbers in ``test_mujoco_features.py``.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 from typing import Any
@@ -27,14 +30,8 @@ BODY = (
     '<worldbody><body><joint name="j" type="{joint}" axis="0 0 1"/>'
     '<inertial pos="0 0 0" mass="2" diaginertia="0.5 0.5 0.5"/></body></worldbody>'
 )
-CONFIG = {
-    "stiffness": "100",
-    "damping": "5",
-    "max_effort": "10",
-    "max_actuator_velocity": "3",
-    "velocity_dependent_resistance": "1",
-    "speed_effort_gradient": "0.05",
-}
+# max_effort max_actuator_velocity velocity_dependent_resistance speed_effort_gradient stiffness damping
+DYNPRM = "10 3 1 0.05 100 5"
 
 
 @pytest.fixture(scope="module")
@@ -50,20 +47,10 @@ def mujoco() -> Any:
     return module
 
 
-def _xml(config: dict[str, str] | None = None, *, joint: str = "hinge", extra: str = "") -> str:
-    items = "".join(f'<config key="{k}" value="{v}"/>' for k, v in (config or CONFIG).items())
-    plugin = f'<plugin name="a" joint="j" plugin="drive_envelope.envelope" {extra}>{items}</plugin>'
-    actuator = f"<actuator>{plugin}</actuator>"
-    return HEAD + EXT + BODY.format(joint=joint) + actuator + "</mujoco>"
-
-
-def _envelope() -> PerformanceEnvelope:
-    return PerformanceEnvelope(
-        max_effort=10.0,
-        max_actuator_velocity=3.0,
-        velocity_dependent_resistance=1.0,
-        speed_effort_gradient=0.05,
-    )
+def _xml(dynprm: str = DYNPRM, *, joint: str = "hinge", extra: str = "", config: str = "") -> str:
+    plugin = f'<plugin name="a" joint="j" plugin="drive_envelope.envelope" dynprm="{dynprm}" {extra}>'
+    plugin += f"{config}</plugin>"
+    return HEAD + EXT + BODY.format(joint=joint) + f"<actuator>{plugin}</actuator></mujoco>"
 
 
 def test_first_step_effort_is_reduced_by_resistance(mujoco: Any) -> None:
@@ -79,12 +66,11 @@ def test_first_step_effort_is_reduced_by_resistance(mujoco: Any) -> None:
 @pytest.mark.parametrize("joint", ["hinge", "slide"])
 def test_envelope_holds_and_velocity_settles_on_max(mujoco: Any, joint: str) -> None:
     """Keep every operating point inside the envelope and settle exactly on max_actuator_velocity."""
-    config = {**CONFIG, "stiffness": "0", "speed_effort_gradient": "0"}
-    model = mujoco.MjModel.from_xml_string(_xml(config, joint=joint, extra=""))
+    # damping-only drive toward 10 rad/s (or m/s), beyond the envelope: a velocity drive
+    model = mujoco.MjModel.from_xml_string(
+        _xml("10 3 1 0 0 5", joint=joint, config='<config key="input" value="vel"/>')
+    )
     data = mujoco.MjData(model)
-    # damping-only drive toward 10 rad/s (or m/s), beyond the envelope: a velocity drive with no pos input
-    model_v = mujoco.MjModel.from_xml_string(_xml({**config, "input": "vel"}, joint=joint))
-    data = mujoco.MjData(model_v)
     data.ctrl[0] = 10.0
     env = PerformanceEnvelope(
         max_effort=10.0,
@@ -94,19 +80,16 @@ def test_envelope_holds_and_velocity_settles_on_max(mujoco: Any, joint: str) -> 
     )
     points = []
     for _ in range(300):
-        mujoco.mj_step(model_v, data)
+        mujoco.mj_step(model, data)
         points.append((data.qvel[0], data.actuator_force[0]))
     velocity, effort = np.array(points).T
     assert env.contains(velocity, effort, atol=1e-9).all()
     assert velocity[-1] == pytest.approx(3.0, abs=1e-12)
-    assert model.nu == 1
 
 
 def test_braking_effort_shrinks_with_speed(mujoco: Any) -> None:
-    """Brake with at most tau_max - R*|v| when the effort opposes the velocity."""
-    model = mujoco.MjModel.from_xml_string(
-        _xml({**CONFIG, "max_actuator_velocity": "inf", "speed_effort_gradient": "0"})
-    )
+    """Brake with at most tau_max - R*|v| when the effort opposes the velocity (no speed limit: -1)."""
+    model = mujoco.MjModel.from_xml_string(_xml("10 -1 1 0 100 5"))
     data = mujoco.MjData(model)
     data.qvel[0] = 5.0
     data.ctrl[0] = 0.0  # target 0 while moving at +5: full braking
@@ -116,22 +99,32 @@ def test_braking_effort_shrinks_with_speed(mujoco: Any) -> None:
     assert abs(effort) == pytest.approx(10.0 - 1.0 * abs(v1), rel=1e-9)
 
 
+def test_over_speed_releases_the_drive_as_physx_does(mujoco: Any) -> None:
+    """Give zero effort when the joint already moves past max_actuator_velocity (it coasts)."""
+    model = mujoco.MjModel.from_xml_string(_xml("10 3 0 0 100 5"))
+    data = mujoco.MjData(model)
+    data.qvel[0] = 20.0  # pushed far past 3 rad/s; one step of 10 N*m braking cannot bring it back
+    data.ctrl[0] = 0.0
+    mujoco.mj_step(model, data)
+    assert data.actuator_force[0] == 0.0
+    assert data.qvel[0] == pytest.approx(20.0)
+
+
 def test_matches_core_functions_on_a_two_link_arm_with_gravity(mujoco: Any) -> None:
     """Compute the effort from diag(M^-1) and the smooth forces exactly as the core functions do."""
     # one explicit instance, two actuators on j2: the pos and ff inputs
     xml = (
         '<mujoco><option timestep="0.005" integrator="Euler"/>'
         '<extension><plugin plugin="drive_envelope.envelope"><instance name="d2">'
-        '<config key="stiffness" value="40"/><config key="damping" value="2"/>'
-        '<config key="max_effort" value="3"/>'
-        '<config key="velocity_dependent_resistance" value="0.2"/><config key="input" value="pos ff"/>'
+        '<config key="input" value="pos ff"/>'
         "</instance></plugin></extension><worldbody>"
         '<body pos="0 0 1"><joint name="j1" axis="0 1 0"/>'
         '<geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04"/>'
         '<body pos="0.4 0 0"><joint name="j2" axis="0 1 0"/>'
         '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>'
         "</body></body></worldbody><actuator>"
-        '<plugin name="a2" joint="j2" instance="d2"/><plugin name="a2_ff" joint="j2" instance="d2"/>'
+        '<plugin name="a2" joint="j2" instance="d2" dynprm="3 -1 0.2 0 40 2"/>'
+        '<plugin name="a2_ff" joint="j2" instance="d2"/>'
         "</actuator></mujoco>"
     )
     model = mujoco.MjModel.from_xml_string(xml)
@@ -171,10 +164,8 @@ def test_feed_forward_alone_equals_a_native_motor(mujoco: Any) -> None:
     xml = (
         '<mujoco><option timestep="0.002"/>' + EXT + "<worldbody>"
         + body.format(x=0, j="a") + body.format(x=2, j="b") + "</worldbody><actuator>"
-        '<plugin name="p" joint="a" plugin="drive_envelope.envelope"><config key="stiffness" value="0"/>'
-        '<config key="damping" value="0"/><config key="max_effort" value="1e30"/>'
-        '<config key="input" value="ff"/>'
-        '</plugin><motor name="m" joint="b"/></actuator></mujoco>'
+        '<plugin name="p" joint="a" plugin="drive_envelope.envelope" dynprm="-1 -1 0 0 0 0">'
+        '<config key="input" value="ff"/></plugin><motor name="m" joint="b"/></actuator></mujoco>'
     )  # fmt: skip
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
@@ -187,29 +178,64 @@ def test_feed_forward_alone_equals_a_native_motor(mujoco: Any) -> None:
 
 
 @pytest.mark.parametrize(
-    ("change", "message"),
+    ("dynprm", "message"),
     [
-        ({"max_effort": None}, "attribute 'max_effort' is missing"),
-        ({"stiffness": None}, "attribute 'stiffness' is missing"),
-        ({"damping": "-1"}, "attribute 'damping' = '-1'"),
-        ({"max_effort": "nan"}, "attribute 'max_effort' = 'nan'"),
-        ({"max_effort": "inf"}, "attribute 'max_effort' = 'inf'"),
-        ({"velocity_dependent_resistance": "abc"}, "attribute 'velocity_dependent_resistance' = 'abc'"),
-        ({"max_actuator_velocity": "-3"}, "attribute 'max_actuator_velocity' = '-3'"),
-        ({"speed_effort_gradient": "NaN"}, "attribute 'speed_effort_gradient' = 'NaN'"),
-        ({"drive_type": "torque"}, "attribute 'drive_type' = 'torque'"),
-        ({"input": "pos pos"}, "attribute 'input' = 'pos pos'"),
-        ({"input": "pos vel"}, "has 1 actuator(s) of this instance, expected 2"),
+        ("-2 3 1 0 100 5", "dynprm[0] (max_effort) = -2: expected a number in [0, 1e12] or -1 (no limit)"),
+        ("10 nan 1 0 100 5", "dynprm[1] (max_actuator_velocity) = nan"),
+        ("10 inf 1 0 100 5", "dynprm[1] (max_actuator_velocity) = inf"),
+        (
+            "10 3 -1 0 100 5",
+            "dynprm[2] (velocity_dependent_resistance) = -1: expected a number in [0, 1e12] [",
+        ),
+        ("10 3 1 -0.1 100 5", "dynprm[3] (speed_effort_gradient) = -0.1: expected"),
+        ("1e308 3 1 0 1e308 5", "dynprm[0] (max_effort) = 1e+308: expected a number in [0, 1e12]"),
+        ("10 3 1 0 2e12 5", "dynprm[4] (stiffness) = 2000000000000"),
+        ("10 3 1 0 100 -1", "dynprm[5] (damping) = -1"),
+        ("10 3 1 0 100 5 0 1", "dynprm[7] = 1: reserved, expected 0"),
+        ("1 0 0 0 0 0", "dynprm is MuJoCo's default (1 0 0 0 0 0): give the drive's numbers"),
     ],
 )
-def test_bad_config_fails_compilation_naming_actuator_and_attribute(
-    mujoco: Any, change: dict[str, str | None], message: str
+def test_bad_numbers_fail_compilation_naming_actuator_and_slot(
+    mujoco: Any, dynprm: str, message: str
 ) -> None:
-    """Refuse missing, negative, NaN or malformed attributes at compile time with one clear message."""
-    config = {k: v for k, v in {**CONFIG, **change}.items() if v is not None}
+    """Refuse negative, NaN, infinite, too large (> 1e12), reserved and forgotten numbers at compile time."""
     with pytest.raises(ValueError, match=r"drive_envelope\.envelope: actuator 'a'") as info:
-        mujoco.MjModel.from_xml_string(_xml(config))
+        mujoco.MjModel.from_xml_string(_xml(dynprm))
     assert message in str(info.value)
+
+
+def test_an_actuator_without_dynprm_is_refused(mujoco: Any) -> None:
+    """Name the forgotten numbers: MuJoCo's default dynprm (1 0 ...) is never taken as a drive."""
+    xml = (
+        HEAD
+        + EXT
+        + BODY.format(joint="hinge")
+        + ('<actuator><plugin name="a" joint="j" plugin="drive_envelope.envelope"/></actuator></mujoco>')
+    )
+    with pytest.raises(ValueError, match="dynprm is MuJoCo's default"):
+        mujoco.MjModel.from_xml_string(xml)
+
+
+def test_numbers_in_config_say_where_they_moved(mujoco: Any) -> None:
+    """Refuse the old <config key="max_effort"> form with the dynprm to write instead."""
+    config = '<config key="max_effort" value="10"/><config key="stiffness" value="100"/>'
+    with pytest.raises(ValueError, match="attribute 'max_effort' is no longer a <config> key") as info:
+        mujoco.MjModel.from_xml_string(_xml(config=config))
+    assert 'here dynprm="10 -1 0 0 100 0"' in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ('<config key="drive_type" value="torque"/>', "attribute 'drive_type' = 'torque'"),
+        ('<config key="input" value="pos pos"/>', "attribute 'input' = 'pos pos'"),
+        ('<config key="input" value="pos vel"/>', "has 1 actuator(s) of this instance, expected 2"),
+    ],
+)
+def test_bad_config_fails_compilation(mujoco: Any, config: str, message: str) -> None:
+    """Refuse a bad drive type, repeated inputs and the wrong number of actuators for 'input'."""
+    with pytest.raises(ValueError, match=re.escape(message)):
+        mujoco.MjModel.from_xml_string(_xml(config=config))
 
 
 @pytest.mark.parametrize(
@@ -229,6 +255,16 @@ def test_unsupported_transmission_fails_compilation(
     if joint == "free":
         xml = xml.replace('<joint name="j" type="free" axis="0 0 1"/>', '<freejoint name="j"/>')
     with pytest.raises(ValueError, match=message):
+        mujoco.MjModel.from_xml_string(xml)
+
+
+@pytest.mark.parametrize("timestep", ["-0.002", "0"])
+def test_a_timestep_that_is_not_positive_fails_compilation(mujoco: Any, timestep: str) -> None:
+    """Refuse timestep <= 0 (a negative one gave 1.7e7 N*m against a 3.3 N*m cap)."""
+    xml = _xml().replace('timestep="0.01"', f'timestep="{timestep}"')
+    with pytest.raises(
+        ValueError, match=r"option 'timestep' = -?0(\.002)?: expected a finite number > 0 \[s\]"
+    ):
         mujoco.MjModel.from_xml_string(xml)
 
 

@@ -147,3 +147,45 @@ def test_cli_simulate_with_mujoco_engine(tmp_path: Path) -> None:
     out = tmp_path / "run.csv"
     assert main(["simulate", str(PGS_FILES[0]), "--engine", "mujoco", "-o", str(out)]) == 0
     assert out.read_text().splitlines()[0] == "time,position,velocity,effort"
+
+
+def test_a_diverging_run_stops_with_one_line_instead_of_a_silent_reset(tmp_path: Path) -> None:
+    """Stop with an InputError when MuJoCo flags |v| > 1e10 (it used to reset to v = 0 and exit 0)."""
+    from drive_envelope import InputError
+
+    data = {
+        "joint": {"type": "revolute", "inertia": 1e-6},
+        "drive": {"stiffness": 0.0, "damping": 0.0, "max_effort": 0},
+        "load": {"applied_effort": 1e9},
+        "simulation": {"solver": "pgs", "dt": 0.01, "duration": 0.05, "position_iterations": 1},
+    }
+    scenario = scenario_from_mapping(data, source="runaway")
+    with pytest.raises(
+        InputError, match=r"MuJoCo stopped at step 1 \(t = 0.01 s\): Nan, Inf or huge value in Q(VEL|ACC)"
+    ):
+        simulate(scenario, "mujoco")
+    from drive_envelope._src.cli.main import main
+
+    file = tmp_path / "runaway.toml"
+    file.write_text(
+        '[joint]\ntype = "revolute"\ninertia = 1e-6\n[drive]\nstiffness = 0\ndamping = 0\nmax_effort = 0\n'
+        "[load]\napplied_effort = 1e9\n[simulation]\nsolver = 'pgs'\ndt = 0.01\nduration = 0.05\n"
+    )
+    out = tmp_path / "run.csv"
+    assert main(["simulate", str(file), "--engine", "mujoco", "-o", str(out)]) == 2
+    assert not out.exists()
+
+
+def test_an_inertia_below_mujocos_minimum_is_a_one_line_error() -> None:
+    """Refuse joint.inertia < 1e-15 (MuJoCo's mjMINVAL) naming the key, instead of a compile traceback."""
+    from drive_envelope import InputError
+
+    data = {
+        "joint": {"type": "revolute", "inertia": 1e-16},
+        "drive": {"stiffness": 1.0, "damping": 0.1, "max_effort": 1},
+        "simulation": {"solver": "pgs", "dt": 0.01, "duration": 0.05, "position_iterations": 1},
+    }
+    with pytest.raises(
+        InputError, match=r"key 'joint.inertia' = 1e-16: the mujoco engine needs at least 1e-15"
+    ):
+        simulate(scenario_from_mapping(data, source="tiny"), "mujoco")

@@ -4,7 +4,12 @@ The robot is built with ``mujoco.MjSpec`` (SI units): a floating torso and four 
 joints each (hip abduction, hip flexion, knee). Every joint gets a PhysX drive whose performance
 envelope comes from a catalog datasheet: T-Motor AK80-6 at the hips, Harmonic Drive FHA-8C-50 at
 the knees. Scripted fast squats ask the knees for more speed and torque than their motors have, so they
-run along the envelope; the plot shows each joint's operating points over its envelope.
+run along the envelope; the plot shows each joint's operating points over its envelope. The plugin
+solves all 12 drives together each step (the legs are coupled through the torso), and the summary
+counts, per joint, the samples outside the envelope (relative margin below -1e-6, the ``check``
+command's rule) and the samples where the drive let go because something else pushed the joint past
+its no-load speed (PhysX's over-speed release). Contacts are solved after the drives, so an impact
+can still move a joint past its envelope for a step: those samples are counted too, never hidden.
 
 Run from the repository root (after ``make setup``)::
 
@@ -29,6 +34,7 @@ from drive_envelope.datasheet import resolve_envelope
 if TYPE_CHECKING:
     import mujoco
 
+    from drive_envelope.analysis import JointCheck
     from drive_envelope.teststand import Trajectory
 
 LEGS = {"fl": (0.22, 0.12), "fr": (0.22, -0.12), "hl": (-0.22, 0.12), "hr": (-0.22, -0.12)}
@@ -93,11 +99,15 @@ def _add_leg(torso: Any, leg: str, x: float, y: float) -> None:
     )
 
 
-def build_quadruped(actuators: Literal["plugin", "position"] = "plugin") -> mujoco.MjSpec:
+def build_quadruped(
+    actuators: Literal["plugin", "position"] = "plugin", *, fixed_base: bool = False
+) -> mujoco.MjSpec:
     """The quadruped with plugin drives, or with MuJoCo's native position actuators (same gains,
     ``forcerange`` = +-max_effort) for comparison.
 
-    Actuators (and their first controls, the target positions) follow :func:`joint_names`.
+    Actuators (and their first controls, the target positions) follow :func:`joint_names`. With
+    ``fixed_base`` the torso is welded in the air (no free joint, no contacts): the legs swing
+    freely, coupled only through their own links.
     """
     import mujoco
 
@@ -110,19 +120,22 @@ def build_quadruped(actuators: Literal["plugin", "position"] = "plugin") -> mujo
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[5, 5, 0.1], contype=0, conaffinity=1)
     torso = spec.worldbody.add_body(name="torso", pos=[0, 0, 0.42])
-    torso.add_freejoint(name="root")
+    if fixed_base:
+        spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    else:
+        torso.add_freejoint(name="root")
     torso.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.25, 0.1, 0.05], mass=3.0, conaffinity=0)
     for leg, (x, y) in LEGS.items():
         _add_leg(torso, leg, x, y)
     limits = envelopes()
     if actuators == "plugin":
-        # one plugin instance per motor and gains: hips (abduction and flexion alike), knees
+        # the drives of one motor and gains at once: hips (abduction and flexion alike), knees
         names = joint_names()
-        for group, joints in (("hips", names[:8]), ("knees", names[8:])):
+        for joints in (names[:8], names[8:]):
             stiffness, damping = GAINS[joints[0].split("_", 1)[1]]
             add_drives(
                 spec, joints, envelope=limits[joints[0]], stiffness=stiffness, damping=damping,
-                instance=group, effort_sensor=False,
+                effort_sensor=False,
             )  # fmt: skip
         return spec
     for name in joint_names():
@@ -157,13 +170,13 @@ def targets(time: float) -> np.ndarray:
     )
 
 
-def run(seconds: float = 3.0) -> dict[str, Trajectory]:
+def run(seconds: float = 3.0, *, fixed_base: bool = False) -> dict[str, Trajectory]:
     """Simulate the scripted motion with plugin drives; one operating-point trajectory per joint."""
     import mujoco
 
     from drive_envelope.teststand import Trajectory
 
-    model = build_quadruped("plugin").compile()
+    model = build_quadruped("plugin", fixed_base=fixed_base).compile()
     data = mujoco.MjData(model)
     names = joint_names()
     dofs = [int(model.jnt_dofadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n)]) for n in names]
@@ -190,21 +203,46 @@ def run(seconds: float = 3.0) -> dict[str, Trajectory]:
     }
 
 
-def summary(trajectories: dict[str, Trajectory]) -> str:
-    """A table: peak |effort| and |velocity| as fractions of the envelope, and time on its boundary."""
+def checks(trajectories: dict[str, Trajectory]) -> dict[str, JointCheck]:
+    """Each joint's samples checked against its envelope (``drive-envelope check``'s rules)."""
+    from drive_envelope.analysis import check_samples
+
     limits = envelopes()
-    lines = [f"{'joint':14s} {'|effort|/max':>12s} {'|v|/v_max':>10s} {'on boundary':>12s} {'inside':>7s}"]
-    for name, traj in trajectories.items():
-        env = limits[name]
+    return {
+        name: check_samples(limits[name], traj.velocity[1:], traj.effort[1:], time=traj.time[1:])
+        for name, traj in trajectories.items()
+    }
+
+
+def summary(trajectories: dict[str, Trajectory]) -> str:
+    """A table: peak |effort| and |velocity| as fractions of the envelope, time on its boundary, and
+    the samples outside the envelope and released (the drive let go above its no-load speed)."""
+    limits = envelopes()
+    header = (
+        f"{'joint':14s} {'|effort|/max':>12s} {'|v|/v_max':>10s} {'on boundary':>12s} "
+        f"{'outside':>9s} {'released':>9s}"
+    )
+    lines = [header]
+    total = outside = released = 0
+    for name, check in checks(trajectories).items():
+        env, traj = limits[name], trajectories[name]
         velocity, effort = traj.velocity[1:], traj.effort[1:]
         effort_margin, velocity_margin = env.margins(velocity, effort)
-        boundary = np.minimum(effort_margin, velocity_margin) < 1e-6 * env.max_effort
-        inside = env.contains(velocity, effort, atol=1e-9) | (effort == 0.0)
+        boundary = (
+            np.minimum(effort_margin / env.max_effort, velocity_margin / env.max_actuator_velocity) < 1e-6
+        )
+        total += check.samples
+        outside += check.samples_outside
+        released += check.samples_released
         lines.append(
             f"{name:14s} {np.abs(effort).max() / env.max_effort:12.2f} "
             f"{np.abs(velocity).max() / env.max_actuator_velocity:10.2f} "
-            f"{100 * boundary.mean():11.1f}% {'yes' if inside.all() else 'NO':>7s}"
+            f"{100 * boundary.mean():11.1f}% {check.samples_outside:9d} {check.samples_released:9d}"
         )
+    lines.append(
+        f"all joints: {outside} of {total} samples outside the envelope ({100 * outside / total:.3f} %), "
+        f"{released} released"
+    )
     return "\n".join(lines)
 
 
@@ -237,18 +275,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Command line: simulate, print the summary, optionally plot and write the MJCF."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--seconds", type=float, default=3.0, help="simulated time [s] (default 3)")
+    parser.add_argument("--fixed-base", action="store_true", help="weld the torso in the air (no contacts)")
     parser.add_argument("--plot", metavar="PNG", help="write the operating-point plot here")
     parser.add_argument("--mjcf", metavar="XML", help="write the model (plugin actuators) as MJCF here")
     args = parser.parse_args(argv)
-    trajectories = run(args.seconds)
+    trajectories = run(args.seconds, fixed_base=args.fixed_base)
     print(summary(trajectories))
     if args.plot:
         plot(trajectories, args.plot)
         print(f"wrote {args.plot}")
     if args.mjcf:
-        from drive_envelope._src.io.atomic import atomic_write_text
+        from drive_envelope.mujoco import write_mjcf
 
-        atomic_write_text(args.mjcf, build_quadruped("plugin").to_xml())
+        write_mjcf(build_quadruped("plugin", fixed_base=args.fixed_base), args.mjcf)
         print(f"wrote {args.mjcf}")
     return 0
 

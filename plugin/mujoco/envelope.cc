@@ -2,59 +2,56 @@
 
 #include "envelope.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <mujoco/mujoco.h>
 
+#include "coupled.h"
+
 namespace drive_envelope::mujoco_plugin {
 namespace {
 
 constexpr char kPluginName[] = "drive_envelope.envelope";
-constexpr char kAttrStiffness[] = "stiffness";
-constexpr char kAttrDamping[] = "damping";
-constexpr char kAttrMaxEffort[] = "max_effort";
-constexpr char kAttrMaxActuatorVelocity[] = "max_actuator_velocity";
-constexpr char kAttrVelocityDependentResistance[] = "velocity_dependent_resistance";
-constexpr char kAttrSpeedEffortGradient[] = "speed_effort_gradient";
 constexpr char kAttrDriveType[] = "drive_type";
 constexpr char kAttrInput[] = "input";
 
-// unit of each number attribute, for error messages (force drive; acceleration gains differ)
-constexpr char kUnitStiffness[] = "[N*m/rad or N/m], or [1/s^2] for an acceleration drive";
-constexpr char kUnitDamping[] = "[N*m*s/rad or N*s/m], or [1/s] for an acceleration drive";
-constexpr char kUnitMaxEffort[] = "[N*m or N]";
-constexpr char kUnitVelocity[] = "[rad/s or m/s]";
-constexpr char kUnitResistance[] = "[N*m*s/rad or N*s/m]";
-constexpr char kUnitGradient[] = "[(rad/s)/(N*m) or (m/s)/N]";
+// the numbers were <config> attributes before they moved to dynprm; they are declared so that
+// an old model gets a message that says where they went instead of MuJoCo's "unknown attribute"
+constexpr const char* kLegacyAttrs[kNumSlots] = {
+    "max_effort", "max_actuator_velocity", "velocity_dependent_resistance",
+    "speed_effort_gradient", "stiffness", "damping"};
 
-// reads a number attribute >= 0; inf only where allowed; a missing optional one keeps *out
-bool ReadNumber(const mjModel* m, int instance, const char* attr, bool required, bool allow_inf,
-                const char* unit, double* out, std::string* error) {
-  const char* value = mj_getPluginConfig(m, instance, attr);
-  const char* expected = allow_inf ? "a number >= 0 or inf" : "a finite number >= 0";
-  if (value == nullptr || value[0] == '\0') {
-    if (!required) return true;
-    *error = std::string("attribute '") + attr + "' is missing: expected " + expected + " " + unit;
-    return false;
+constexpr const char* kSlotNames[kNumSlots] = {
+    "max_effort", "max_actuator_velocity", "velocity_dependent_resistance",
+    "speed_effort_gradient", "stiffness", "damping"};
+
+constexpr const char* kSlotUnits[kNumSlots] = {
+    "[N*m or N]", "[rad/s or m/s]", "[N*m*s/rad or N*s/m]", "[(rad/s)/(N*m) or (m/s)/N]",
+    "[N*m/rad or N/m; 1/s^2 for an acceleration drive]",
+    "[N*m*s/rad or N*s/m; 1/s for an acceleration drive]"};
+
+constexpr char kLayout[] = "dynprm = \"max_effort max_actuator_velocity "
+                           "velocity_dependent_resistance speed_effort_gradient stiffness damping\"";
+
+// the shortest text that reads back as value (15 digits if they round-trip, else 17)
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.15g", value);
+  if (std::strtod(text, nullptr) != value && !std::isnan(value)) {
+    std::snprintf(text, sizeof(text), "%.17g", value);
   }
-  char* end = nullptr;
-  double number = std::strtod(value, &end);
-  while (end && (*end == ' ' || *end == '\t')) end++;
-  bool parsed = end != value && end && *end == '\0';
-  if (!parsed || std::isnan(number) || number < 0 || (std::isinf(number) && !allow_inf)) {
-    *error = std::string("attribute '") + attr + "' = '" + value + "': expected " + expected + " " +
-             unit;
-    return false;
-  }
-  *out = number;
-  return true;
+  return text;
 }
 
 // parses "pos vel ff" (any subset, any order, spaces or commas) into a bitfield
@@ -63,7 +60,7 @@ bool ReadInput(const mjModel* m, int instance, int* input, std::string* error) {
   if (value == nullptr || value[0] == '\0') return true;
   std::string text(value);
   for (char& c : text) {
-    if (c == ',') c = ' ';
+    if (c == ',' || c == '\t') c = ' ';
   }
   int bits = 0;
   size_t start = 0;
@@ -89,20 +86,27 @@ bool ReadInput(const mjModel* m, int instance, int* input, std::string* error) {
   return true;
 }
 
+// a legacy numeric <config> attribute: say where the numbers live now, with the values given
+bool RefuseLegacyNumbers(const mjModel* m, int instance, std::string* error) {
+  int first = -1;
+  std::string example;
+  for (int s = 0; s < kNumSlots; s++) {
+    const char* value = mj_getPluginConfig(m, instance, kLegacyAttrs[s]);
+    bool given = value && value[0];
+    if (given && first < 0) first = s;
+    std::string text = given ? value : (s == kSlotMaxActuatorVelocity ? "-1" : "0");
+    if (text == "inf") text = "-1";
+    example += (s ? " " : "") + text;
+  }
+  if (first < 0) return true;
+  *error = std::string("attribute '") + kLegacyAttrs[first] +
+           "' is no longer a <config> key: a drive's numbers are its actuator's " + kLayout +
+           " (-1: no limit), read at every step; here dynprm=\"" + example + "\"";
+  return false;
+}
+
 int InputCount(int input) {
   return !!(input & kInputPos) + !!(input & kInputVel) + !!(input & kInputFf);
-}
-
-std::string ActuatorName(const mjModel* m, int id) {
-  const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
-  if (name && name[0]) return std::string("'") + name + "'";
-  return "#" + std::to_string(id);
-}
-
-std::string JointName(const mjModel* m, int id) {
-  const char* name = mj_id2name(m, mjOBJ_JOINT, id);
-  if (name && name[0]) return std::string("'") + name + "'";
-  return "#" + std::to_string(id);
 }
 
 // checks that actuator i can feed a drive; returns an empty string if it can
@@ -124,44 +128,182 @@ std::string CheckActuator(const mjModel* m, int i) {
   if (m->actuator_forcelimited[i]) {
     return "attribute 'forcerange' must not be set: the envelope limits the effort";
   }
-  if (m->actuator_ctrlnum[i] != 1 || m->actuator_actnum[i] != 0) {
+  if (m->actuator_ctrlnum[i] != 1 || m->actuator_actnum[i] != 0 ||
+      m->actuator_dyntype[i] != mjDYN_NONE) {
     return "expected one control and no activation (dyntype 'none', no actdim)";
   }
   return "";
 }
 
-// the dofs that L^-T * e_dof can reach, in descending order: dof, then every column of a reached
-// row (its ancestors, plus any fill); fixed by the sparsity of M, so computed once per drive
-std::vector<int> Chain(const mjModel* m, int dof) {
-  std::vector<char> reached(m->nv, 0);
-  std::vector<int> chain;
-  reached[dof] = 1;
-  for (int k = dof; k >= 0; k--) {
-    if (!reached[k]) continue;
-    chain.push_back(k);
-    int start = m->M_rowadr[k];
-    for (int adr = start; adr < start + m->M_rownnz[k] - 1; adr++) reached[m->M_colind[adr]] = 1;
+// MuJoCo's default dynprm (1 0 0 ...): the drive's numbers were never given
+bool IsDefaultDynprm(const mjModel* m, int i) {
+  const mjtNum* prm = m->actuator_dynprm + mjNDYN * i;
+  if (prm[0] != 1) return false;
+  for (int k = 1; k < mjNDYN; k++) {
+    if (prm[k] != 0) return false;
   }
-  return chain;
+  return true;
 }
+
+// the drives of one instance, its actuators grouped by joint in order of appearance
+bool InstanceDrives(const mjModel* m, int instance, std::vector<Drive>* drives,
+                    std::string* error) {
+  std::vector<int> actuators;
+  for (int i = 0; i < m->nactuator; i++) {
+    if (m->actuator_plugin[i] == instance) actuators.push_back(i);
+  }
+  if (actuators.empty()) {
+    *error = "plugin instance #" + std::to_string(instance) + " has no actuator";
+    return false;
+  }
+  InstanceConfig config;
+  std::string problem;
+  if (!InstanceConfig::FromModel(m, instance, &config, &problem)) {
+    *error = "actuator " + ActuatorName(m, actuators[0]) + ": " + problem;
+    return false;
+  }
+  std::vector<Drive> found;
+  for (int i : actuators) {
+    problem = CheckActuator(m, i);
+    if (!problem.empty()) {
+      *error = "actuator " + ActuatorName(m, i) + ": " + problem;
+      return false;
+    }
+    int joint = m->actuator_trnid[2 * i];
+    size_t k = 0;
+    while (k < found.size() && found[k].joint != joint) k++;
+    if (k == found.size()) {
+      Drive drive;
+      drive.joint = joint;
+      drive.dof = m->jnt_dofadr[joint];
+      drive.qpos = m->jnt_qposadr[joint];
+      drive.actuator = i;
+      drive.drive_type = config.drive_type;
+      found.push_back(drive);
+    }
+    found[k].actuators.push_back(i);
+  }
+
+  // the actuators of a joint feed the inputs in canonical order [pos, vel, ff]
+  int ninput = InputCount(config.input);
+  for (Drive& drive : found) {
+    int count = static_cast<int>(drive.actuators.size());
+    if (count != ninput) {
+      *error = "actuator " + ActuatorName(m, drive.actuator) + ": joint " +
+               JointName(m, drive.joint) + " has " + std::to_string(count) +
+               " actuator(s) of this instance, expected " + std::to_string(ninput) +
+               " (one per input of attribute 'input')";
+      return false;
+    }
+    int slot = 0;
+    for (int i : drive.actuators) {
+      while (!(config.input & (1 << slot))) slot++;
+      drive.input[slot++] = i;
+    }
+  }
+  drives->insert(drives->end(), found.begin(), found.end());
+  return true;
+}
+
+// other actuators that push a driven joint bypass the envelope: say so once, naming both
+void WarnOtherActuators(const mjModel* m, const Structure& s) {
+  for (const Drive& drive : s.drives) {
+    for (int i : s.native) {
+      bool on_joint = (m->actuator_trntype[i] == mjTRN_JOINT ||
+                       m->actuator_trntype[i] == mjTRN_JOINTINPARENT) &&
+                      m->actuator_trnid[2 * i] == drive.joint;
+      bool on_tendon = false;
+      if (m->actuator_trntype[i] == mjTRN_TENDON) {
+        int tendon = m->actuator_trnid[2 * i];
+        for (int w = m->tendon_adr[tendon]; w < m->tendon_adr[tendon] + m->tendon_num[tendon];
+             w++) {
+          on_tendon |= m->wrap_type[w] == mjWRAP_JOINT && m->wrap_objid[w] == drive.joint;
+        }
+      }
+      if (on_joint || on_tendon) {
+        WarnOnce(std::string(kPluginName) + ": actuator " + ActuatorName(m, i) +
+                 " also acts on joint " + JointName(m, drive.joint) + ", driven by " +
+                 ActuatorName(m, drive.actuator) +
+                 ": its force bypasses the envelope (the drive's 'ff' input adds effort that "
+                 "counts)");
+      }
+    }
+    if (m->jnt_actfrclimited[drive.joint]) {
+      WarnOnce(std::string(kPluginName) + ": joint " + JointName(m, drive.joint) +
+               " has an actuatorfrcrange: MuJoCo clips the drive's effort after the envelope");
+    }
+  }
+}
+
+std::mutex warn_mutex;
 
 }  // namespace
 
-bool EnvelopeConfig::FromModel(const mjModel* m, int instance, EnvelopeConfig* config,
+std::string ActuatorName(const mjModel* m, int id) {
+  const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
+  if (name && name[0]) return std::string("'") + name + "'";
+  return "#" + std::to_string(id);
+}
+
+std::string JointName(const mjModel* m, int id) {
+  const char* name = mj_id2name(m, mjOBJ_JOINT, id);
+  if (name && name[0]) return std::string("'") + name + "'";
+  return "#" + std::to_string(id);
+}
+
+void WarnOnce(const std::string& message) {
+  // leaked on purpose: no destruction-order issue at exit
+  static std::set<std::string>* seen = new std::set<std::string>();
+  {
+    std::lock_guard<std::mutex> lock(warn_mutex);
+    if (!seen->insert(message).second) return;
+  }
+  mju_warning("%s", message.c_str());
+}
+
+int LeaderInstance(const mjModel* m) {
+  int slot = -1;
+  mjp_getPlugin(kPluginName, &slot);
+  for (int j = 0; j < m->nplugin; j++) {
+    if (m->plugin[j] == slot) return j;
+  }
+  return -1;
+}
+
+int DriveParams::FromModel(const mjModel* m, int i, DriveParams* params, std::string* error) {
+  const mjtNum* prm = m->actuator_dynprm + mjNDYN * i;
+  double value[kNumSlots];
+  for (int s = 0; s < kNumSlots; s++) {
+    bool no_limit = s <= kSlotMaxActuatorVelocity && prm[s] == kNoLimit;
+    if (!no_limit && !(prm[s] >= 0 && prm[s] <= kParamBound)) {
+      *error = "dynprm[" + std::to_string(s) + "] (" + kSlotNames[s] + ") = " + Number(prm[s]) +
+               ": expected a number in [0, 1e12]" +
+               (s <= kSlotMaxActuatorVelocity ? " or -1 (no limit) " : " ") + kSlotUnits[s];
+      return s;
+    }
+    value[s] = no_limit ? INFINITY : prm[s];
+  }
+  for (int s = kNumSlots; s < mjNDYN; s++) {
+    if (prm[s] != 0) {
+      *error = "dynprm[" + std::to_string(s) + "] = " + Number(prm[s]) + ": reserved, expected 0";
+      return s;
+    }
+  }
+  params->max_effort = value[kSlotMaxEffort];
+  params->max_actuator_velocity = value[kSlotMaxActuatorVelocity];
+  params->velocity_dependent_resistance = value[kSlotResistance];
+  params->speed_effort_gradient = value[kSlotGradient];
+  params->stiffness = value[kSlotStiffness];
+  params->damping = value[kSlotDamping];
+  return -1;
+}
+
+bool InstanceConfig::FromModel(const mjModel* m, int instance, InstanceConfig* config,
                                std::string* error) {
-  EnvelopeConfig c;
-  bool ok =
-      ReadNumber(m, instance, kAttrStiffness, true, false, kUnitStiffness, &c.stiffness, error) &&
-      ReadNumber(m, instance, kAttrDamping, true, false, kUnitDamping, &c.damping, error) &&
-      ReadNumber(m, instance, kAttrMaxEffort, true, false, kUnitMaxEffort, &c.max_effort, error) &&
-      ReadNumber(m, instance, kAttrMaxActuatorVelocity, false, true, kUnitVelocity,
-                 &c.max_actuator_velocity, error) &&
-      ReadNumber(m, instance, kAttrVelocityDependentResistance, false, false, kUnitResistance,
-                 &c.velocity_dependent_resistance, error) &&
-      ReadNumber(m, instance, kAttrSpeedEffortGradient, false, false, kUnitGradient,
-                 &c.speed_effort_gradient, error) &&
-      ReadInput(m, instance, &c.input, error);
-  if (!ok) return false;
+  InstanceConfig c;
+  if (!RefuseLegacyNumbers(m, instance, error) || !ReadInput(m, instance, &c.input, error)) {
+    return false;
+  }
   const char* type = mj_getPluginConfig(m, instance, kAttrDriveType);
   if (type && type[0] && std::strcmp(type, "force") && std::strcmp(type, "acceleration")) {
     *error = std::string("attribute 'drive_type' = '") + type +
@@ -173,166 +315,83 @@ bool EnvelopeConfig::FromModel(const mjModel* m, int instance, EnvelopeConfig* c
   return true;
 }
 
-std::unique_ptr<Envelope> Envelope::Create(const mjModel* m, int instance) {
-  std::vector<int> actuators;
-  for (int i = 0; i < m->nactuator; i++) {
-    if (m->actuator_plugin[i] == instance) actuators.push_back(i);
-  }
-  if (actuators.empty()) {
-    mju_warning("%s: plugin instance %d has no actuator", kPluginName, instance);
-    return nullptr;
-  }
-
-  // configuration errors name the instance's first actuator
-  EnvelopeConfig config;
-  std::string error;
-  if (!EnvelopeConfig::FromModel(m, instance, &config, &error)) {
-    mju_warning("%s: actuator %s: %s", kPluginName, ActuatorName(m, actuators[0]).c_str(),
-                error.c_str());
-    return nullptr;
-  }
-
-  // group the actuators by joint, in order of appearance: one drive per joint
-  std::vector<Drive> drives;
-  std::vector<int> count;
-  for (int i : actuators) {
-    std::string problem = CheckActuator(m, i);
-    if (!problem.empty()) {
-      mju_warning("%s: actuator %s: %s", kPluginName, ActuatorName(m, i).c_str(),
-                  problem.c_str());
-      return nullptr;
-    }
-    int joint = m->actuator_trnid[2 * i];
-    size_t k = 0;
-    while (k < drives.size() && drives[k].joint != joint) k++;
-    if (k == drives.size()) {
-      Drive drive;
-      drive.joint = joint;
-      drive.dof = m->jnt_dofadr[joint];
-      drive.qpos = m->jnt_qposadr[joint];
-      drive.actuator = i;
-      drive.chain = Chain(m, drive.dof);
-      drives.push_back(drive);
-      count.push_back(0);
-    }
-    drives[k].outputs.push_back(m->actuator_outadr[i]);
-    count[k]++;
-  }
-
-  // the actuators of a joint feed the inputs in canonical order [pos, vel, ff]
-  int ninput = InputCount(config.input);
-  for (size_t k = 0; k < drives.size(); k++) {
-    if (count[k] != ninput) {
-      mju_warning("%s: actuator %s: joint %s has %d actuator(s) of this instance, expected %d "
-                  "(one per input of attribute 'input')", kPluginName,
-                  ActuatorName(m, drives[k].actuator).c_str(),
-                  JointName(m, drives[k].joint).c_str(), count[k], ninput);
-      return nullptr;
-    }
-    int slot = 0;
-    for (int i : actuators) {
-      if (m->actuator_trnid[2 * i] != drives[k].joint) continue;
-      while (!(config.input & (1 << slot))) slot++;
-      int adr = m->actuator_ctrladr[i];
-      drives[k].ctrl[slot] = adr;
-      drives[k].ctrllimited[slot] = m->actuator_ctrllimited[adr];
-      drives[k].ctrlrange[slot][0] = m->actuator_ctrlrange[2 * adr];
-      drives[k].ctrlrange[slot][1] = m->actuator_ctrlrange[2 * adr + 1];
-      slot++;
-    }
-  }
-
-  // the lowest instance of this plugin computes the shared acceleration for all of them
-  int ourslot = -1;
-  mjp_getPlugin(kPluginName, &ourslot);
-  int leader = instance;
+bool Structure::Build(const mjModel* m, Structure* structure, std::string* error) {
+  int slot = -1;
+  mjp_getPlugin(kPluginName, &slot);
+  Structure s;
   for (int j = 0; j < m->nplugin; j++) {
-    if (m->plugin[j] == ourslot) {
-      leader = j;
-      break;
+    if (m->plugin[j] == slot && !InstanceDrives(m, j, &s.drives, error)) return false;
+  }
+
+  // one drive per joint, whatever the instance: two would add up past the envelope
+  for (size_t a = 0; a < s.drives.size(); a++) {
+    for (size_t b = a + 1; b < s.drives.size(); b++) {
+      if (s.drives[a].joint == s.drives[b].joint) {
+        *error = "joint " + JointName(m, s.drives[a].joint) + " has two drives: actuators " +
+                 ActuatorName(m, s.drives[a].actuator) + " and " +
+                 ActuatorName(m, s.drives[b].actuator) +
+                 " (one drive per joint; its 'ff' input adds effort that counts)";
+        return false;
+      }
     }
   }
-  return std::unique_ptr<Envelope>(
-      new Envelope(std::move(config), std::move(drives), leader, m->nv));
-}
 
-Envelope::Envelope(EnvelopeConfig config, std::vector<Drive> drives, int leader, int nv)
-    : config_(std::move(config)), drives_(std::move(drives)), leader_(leader), force_(nv),
-      qacc_(nv), chain_(nv, 0.0) {}
-
-void Envelope::ComputeSmoothAcceleration(const mjModel* m, mjData* d) {
-  int nv = m->nv;
-  mjtNum* force = force_.data();
-
-  // smooth forces MuJoCo has at actuation time: passive - bias + applied + J'*xfrc_applied
-  for (int i = 0; i < nv; i++) {
-    force[i] = d->qfrc_passive[i] - d->qfrc_bias[i] + d->qfrc_applied[i];
-  }
-  for (int b = 1; b < m->nbody; b++) {
-    const mjtNum* xfrc = d->xfrc_applied + 6 * b;
-    if (xfrc[0] || xfrc[1] || xfrc[2] || xfrc[3] || xfrc[4] || xfrc[5]) {
-      mj_applyFT(m, d, xfrc, xfrc + 3, d->xipos + 3 * b, b, force);
+  // every drive's numbers must be valid when the data is made
+  for (const Drive& drive : s.drives) {
+    std::string problem;
+    if (IsDefaultDynprm(m, drive.actuator)) {
+      *error = "actuator " + ActuatorName(m, drive.actuator) +
+               ": dynprm is MuJoCo's default (1 0 0 0 0 0): give the drive's numbers, " + kLayout +
+               " (-1: no limit)";
+      return false;
+    }
+    DriveParams params;
+    if (DriveParams::FromModel(m, drive.actuator, &params, &problem) >= 0) {
+      *error = "actuator " + ActuatorName(m, drive.actuator) + ": " + problem;
+      return false;
     }
   }
-  mj_solveM(m, d, qacc_.data(), force, 1);
+  if (!(m->opt.timestep > 0 && std::isfinite(m->opt.timestep))) {
+    *error = "option 'timestep' = " + Number(m->opt.timestep) +
+             ": expected a finite number > 0 [s]";
+    return false;
+  }
+
+  std::sort(s.drives.begin(), s.drives.end(),
+            [](const Drive& a, const Drive& b) { return a.dof < b.dof; });
+  for (int i = 0; i < m->nactuator; i++) {
+    int instance = m->actuator_plugin[i];
+    if (instance < 0 || m->plugin[instance] != slot) s.native.push_back(i);
+  }
+  *structure = std::move(s);
+  return true;
 }
 
-double Envelope::Response(const mjModel* m, const mjData* d, const Drive& drive) {
-  // M = L'*D*L, so (M^-1)_ii = z'*D^-1*z with z = L^-T*e_i, nonzero only on the drive's chain
-  mjtNum* z = chain_.data();
-  z[drive.dof] = 1;
-  double response = 0;
-  for (int k : drive.chain) {
-    mjtNum zk = z[k];
-    z[k] = 0;  // leave the scratch zeroed for the next call
-    response += zk * zk * d->qLDiagInv[k];
-    int start = m->M_rowadr[k];
-    int end = start + m->M_rownnz[k] - 1;
-    for (int adr = start; adr < end; adr++) {
-      z[m->M_colind[adr]] -= d->qLD[adr] * zk;
-    }
+std::unique_ptr<Envelope> Envelope::Create(const mjModel* m, mjData* d, int instance) {
+  if (instance != LeaderInstance(m)) {
+    return std::unique_ptr<Envelope>(new Envelope(nullptr));  // the leader does the work
   }
-  return response;
+  Structure structure;
+  std::string error;
+  if (!Structure::Build(m, &structure, &error)) {
+    mju_warning("%s: %s", kPluginName, error.c_str());
+    return nullptr;
+  }
+  WarnOtherActuators(m, structure);
+  auto solver = std::make_unique<CoupledSolver>(m, std::move(structure));
+  return std::unique_ptr<Envelope>(new Envelope(std::move(solver)));
 }
+
+Envelope::Envelope(std::unique_ptr<CoupledSolver> solver) : solver_(std::move(solver)) {}
+
+Envelope::~Envelope() = default;
 
 void Envelope::Compute(const mjModel* m, mjData* d, int instance) {
-  if (instance == leader_) ComputeSmoothAcceleration(m, d);
-  const Envelope* leader = instance == leader_ ?
-      this : reinterpret_cast<const Envelope*>(d->plugin_data[leader_]);
-  const mjtNum* qacc = leader->qacc_.data();
-  const EnvelopeConfig& c = config_;
-  double dt = m->opt.timestep;
-
-  for (const Drive& drive : drives_) {
-    // inputs in canonical order; absent inputs are 0, limited ones are clamped
-    double u[3] = {0, 0, 0};
-    for (int s = 0; s < 3; s++) {
-      if (drive.ctrl[s] < 0) continue;
-      u[s] = d->ctrl[drive.ctrl[s]];
-      if (drive.ctrllimited[s]) u[s] = mju_clip(u[s], drive.ctrlrange[s][0], drive.ctrlrange[s][1]);
-    }
-    double target_pos = u[0], target_vel = u[1], ff = u[2];
-
-    // unconstrained end-of-step velocity before the drive, containing the feed-forward effort
-    double r = Response(m, d, drive);
-    double v0 = d->qvel[drive.dof] + dt * qacc[drive.dof] + dt * r * ff;
-
-    // implicit PD effort, then the envelope clamp on the TOTAL actuator effort (drive + ff)
-    double err = target_pos - d->qpos[drive.qpos];
-    double effort = ff + ImplicitDriveEffort(c.stiffness, c.damping, err, v0, target_vel, r, dt,
-                                             c.drive_type);
-    double impulse = ClampDriveImpulse<double>(
-        v0, ff * dt, effort * dt, r, c.max_actuator_velocity, c.max_effort * dt,
-        c.speed_effort_gradient / dt, c.velocity_dependent_resistance * dt);
-
-    // NaN or overflowing states: the drive lets go instead of writing NaN
-    double total = 0;
-    if (std::isfinite(impulse)) {
-      // (x*dt)/dt can round one ulp above x: the clamp never grows a request, nor may we
-      total = std::copysign(std::fmin(std::fabs(impulse / dt), std::fabs(effort)), impulse);
-    }
-    for (int out : drive.outputs) d->actuator_force[out] = 0;
-    d->actuator_force[m->actuator_outadr[drive.actuator]] = total;
+  if (!solver_) return;
+  int sweeps = solver_->Compute(m, d);
+  if (m->plugin_statenum[instance] >= 2) {
+    d->plugin_state[m->plugin_stateadr[instance]] = sweeps;
+    d->plugin_state[m->plugin_stateadr[instance] + 1] = solver_->solves();
   }
 }
 
@@ -343,14 +402,18 @@ void Envelope::RegisterPlugin() {
   plugin.capabilityflags |= mjPLUGIN_ACTUATOR;
 
   static const char* attributes[] = {
-      kAttrStiffness, kAttrDamping, kAttrMaxEffort, kAttrMaxActuatorVelocity,
-      kAttrVelocityDependentResistance, kAttrSpeedEffortGradient, kAttrDriveType, kAttrInput};
+      kAttrDriveType, kAttrInput, kLegacyAttrs[0], kLegacyAttrs[1], kLegacyAttrs[2],
+      kLegacyAttrs[3], kLegacyAttrs[4], kLegacyAttrs[5]};
   plugin.nattribute = sizeof(attributes) / sizeof(attributes[0]);
   plugin.attributes = attributes;
-  plugin.nstate = +[](const mjModel* m, int instance) { return 0; };
 
+  // the leader's two state numbers (diagnostics, not state): the Gauss-Seidel sweeps of its last
+  // computation, and the rows they solved (clamp evaluations)
+  plugin.nstate = +[](const mjModel* m, int instance) {
+    return instance == LeaderInstance(m) ? 2 : 0;
+  };
   plugin.init = +[](const mjModel* m, mjData* d, int instance) {
-    std::unique_ptr<Envelope> envelope = Envelope::Create(m, instance);
+    std::unique_ptr<Envelope> envelope = Envelope::Create(m, d, instance);
     if (envelope == nullptr) return -1;
     d->plugin_data[instance] = reinterpret_cast<uintptr_t>(envelope.release());
     return 0;
@@ -359,7 +422,9 @@ void Envelope::RegisterPlugin() {
     delete reinterpret_cast<Envelope*>(d->plugin_data[instance]);
     d->plugin_data[instance] = 0;
   };
-  plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {};
+  plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {
+    for (int k = 0; k < m->plugin_statenum[instance]; k++) plugin_state[k] = 0;
+  };
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
     reinterpret_cast<Envelope*>(d->plugin_data[instance])->Compute(m, d, instance);
   };

@@ -2,11 +2,15 @@
 //
 // drive_envelope.envelope: a MuJoCo actuator plugin with the PhysX articulation drive (implicit
 // spring-damper) and the PhysX 5.6+ drive performance envelope. See README.md for the law.
+//
+// The drives' numbers live in the model (actuator_dynprm of each drive's effort actuator, see
+// Slot) and are read at every step; the structure (which joints, which inputs) is fixed when an
+// mjData is made. One solver per mjData, owned by the lowest instance of this plugin (the
+// leader), computes the efforts of every drive of every instance together (coupled.h).
 
 #ifndef DRIVE_ENVELOPE_PLUGIN_MUJOCO_ENVELOPE_H_
 #define DRIVE_ENVELOPE_PLUGIN_MUJOCO_ENVELOPE_H_
 
-#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,21 +23,48 @@
 
 namespace drive_envelope::mujoco_plugin {
 
+class CoupledSolver;
+
 // control inputs, same bits and canonical order as MuJoCo's pid actuator (mjtCtrlInput)
 enum Input : int { kInputPos = 1, kInputVel = 2, kInputFf = 4 };
 
-struct EnvelopeConfig {
-  double stiffness = 0;                      // [N*m/rad or N/m] (force), [1/s^2] (acceleration)
-  double damping = 0;                        // [N*m*s/rad or N*s/m] (force), [1/s] (acceleration)
-  double max_effort = 0;                     // [N*m or N]
-  double max_actuator_velocity = INFINITY;   // [rad/s or m/s]
-  double velocity_dependent_resistance = 0;  // [N*m*s/rad or N*s/m]
-  double speed_effort_gradient = 0;          // [(rad/s)/(N*m) or (m/s)/N]
+// a drive's numbers: actuator_dynprm[mjNDYN*actuator + slot] of its effort actuator, SI
+enum Slot : int {
+  kSlotMaxEffort = 0,             // [N*m or N], or kNoLimit
+  kSlotMaxActuatorVelocity = 1,   // [rad/s or m/s], or kNoLimit
+  kSlotResistance = 2,            // velocity_dependent_resistance [N*m*s/rad or N*s/m]
+  kSlotGradient = 3,              // speed_effort_gradient [(rad/s)/(N*m) or (m/s)/N]
+  kSlotStiffness = 4,             // [N*m/rad or N/m] (force), [1/s^2] (acceleration)
+  kSlotDamping = 5,               // [N*m*s/rad or N*s/m] (force), [1/s] (acceleration)
+  kNumSlots = 6                   // slots 6..9 are reserved and must be 0
+};
+
+// largest finite number a slot may hold [SI]; larger ones overflow the step's arithmetic
+constexpr double kParamBound = 1e12;
+
+// max_effort or max_actuator_velocity without a limit (MuJoCo's MJCF writer cannot write inf)
+constexpr double kNoLimit = -1;
+
+// the six numbers of one drive, with kNoLimit turned into inf
+struct DriveParams {
+  double max_effort = 0;
+  double max_actuator_velocity = 0;
+  double velocity_dependent_resistance = 0;
+  double speed_effort_gradient = 0;
+  double stiffness = 0;
+  double damping = 0;
+
+  // reads actuator i's dynprm; returns -1, or the first bad slot (writing the reason to error)
+  static int FromModel(const mjModel* m, int i, DriveParams* params, std::string* error);
+};
+
+// the configuration of one plugin instance: structural, read when an mjData is made
+struct InstanceConfig {
   DriveType drive_type = DriveType::kForce;
-  int input = kInputPos;                     // bitfield of Input
+  int input = kInputPos;  // bitfield of Input
 
   // reads the plugin attributes; on bad input returns false and writes the reason to error
-  static bool FromModel(const mjModel* m, int instance, EnvelopeConfig* config,
+  static bool FromModel(const mjModel* m, int instance, InstanceConfig* config,
                         std::string* error);
 };
 
@@ -42,41 +73,48 @@ struct Drive {
   int joint = -1;
   int dof = -1;
   int qpos = -1;
-  int ctrl[3] = {-1, -1, -1};  // control address of the pos, vel, ff inputs; -1: absent (0)
-  int actuator = -1;           // first actuator: carries the drive's total effort
-  std::vector<int> outputs;    // force addresses of all the drive's actuators
-  std::vector<int> chain;      // dofs where L^-T e_dof can be nonzero, descending (static)
-  bool ctrllimited[3] = {false, false, false};
-  double ctrlrange[3][2] = {{0, 0}, {0, 0}, {0, 0}};
+  int actuator = -1;             // effort actuator: carries the total effort, holds the numbers
+  int input[3] = {-1, -1, -1};   // actuator of the pos, vel, ff inputs; -1: absent (0)
+  std::vector<int> actuators;    // all of the drive's actuators (their outputs are written)
+  DriveType drive_type = DriveType::kForce;
+};
+
+// every drive of this plugin in a model, and what else acts on their DOFs
+struct Structure {
+  std::vector<Drive> drives;     // in dof order (root to leaves)
+  std::vector<int> native;       // actuators of no instance of this plugin (forces predicted)
+
+  // builds it from all instances; on bad input returns false and writes the reason to error
+  static bool Build(const mjModel* m, Structure* structure, std::string* error);
 };
 
 class Envelope {
  public:
   // returns an instance, or null after mju_warning on a bad configuration
-  static std::unique_ptr<Envelope> Create(const mjModel* m, int instance);
+  static std::unique_ptr<Envelope> Create(const mjModel* m, mjData* d, int instance);
+  ~Envelope();
 
-  // writes the drive's total effort to d->actuator_force (idempotent)
+  // the leader writes every drive's total effort to d->actuator_force (idempotent); others: none
   void Compute(const mjModel* m, mjData* d, int instance);
 
   // adds the plugin to MuJoCo's global registry
   static void RegisterPlugin();
 
  private:
-  Envelope(EnvelopeConfig config, std::vector<Drive> drives, int leader, int nv);
+  explicit Envelope(std::unique_ptr<CoupledSolver> solver);
 
-  // leader only: unconstrained acceleration from the smooth forces known at actuation time
-  void ComputeSmoothAcceleration(const mjModel* m, mjData* d);
-
-  // diagonal entry of M^-1 for a drive's dof, from the factorization already in d->qLD
-  double Response(const mjModel* m, const mjData* d, const Drive& drive);
-
-  EnvelopeConfig config_;
-  std::vector<Drive> drives_;
-  int leader_;                   // instance that computes the shared acceleration
-  std::vector<mjtNum> force_;    // leader: smooth forces besides the drives (nv)
-  std::vector<mjtNum> qacc_;     // leader: M^-1 * force_ (nv)
-  std::vector<mjtNum> chain_;    // scratch for Response (nv), zero between calls
+  std::unique_ptr<CoupledSolver> solver_;  // leader only
 };
+
+// the lowest instance of this plugin in m (the leader), or -1
+int LeaderInstance(const mjModel* m);
+
+// "'name'" or "#id" of an actuator or joint, for messages
+std::string ActuatorName(const mjModel* m, int id);
+std::string JointName(const mjModel* m, int id);
+
+// mju_warning, but each distinct message only once per process (init runs for every mjData)
+void WarnOnce(const std::string& message);
 
 }  // namespace drive_envelope::mujoco_plugin
 

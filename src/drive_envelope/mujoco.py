@@ -1,43 +1,63 @@
 """MuJoCo: the native actuator plugin ``drive_envelope.envelope`` and helpers to use it.
 
-The plugin gives any MuJoCo model PhysX's implicit drive limited by the performance envelope. Load
-it once per process with :func:`load_plugin` (after building it with
-``python -m drive_envelope._src.adapters.mujoco.build``, part of ``make setup``), then either
-write ``<plugin plugin="drive_envelope.envelope">`` actuators in MJCF or call :func:`add_drive` on a
-``mujoco.MjSpec``. mujoco itself is imported only inside these functions.
+The plugin gives any MuJoCo model PhysX's implicit drive limited by the performance envelope,
+solving every drive of the model together each step. Load it once per process with
+:func:`load_plugin` (after building it with ``python -m drive_envelope._src.adapters.mujoco.build``,
+part of ``make setup``), then either write ``<plugin plugin="drive_envelope.envelope">`` actuators
+in MJCF, call :func:`add_drive` on a ``mujoco.MjSpec``, or run ``drive-envelope mujoco apply``.
+A drive's numbers live in the model (``actuator_dynprm``, :data:`DYNPRM_SLOTS`):
+:func:`set_envelope` and :func:`set_gains` change them between steps. mujoco itself is imported
+only inside these functions.
 
 MuJoCo's units are unspecified; drive_envelope assumes the model is SI (rad, m, s, kg): efforts in
-[N*m or N], velocities in [rad/s or m/s]. Use the Euler integrator (see ``plugin/mujoco/README.md``).
+[N*m or N], velocities in [rad/s or m/s]. Integrators: ``plugin/mujoco/README.md``.
 """
 
 from __future__ import annotations
 
 from drive_envelope._src.adapters.mujoco.build import BUILD_COMMAND, PluginError, build_plugin
 from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME, load_plugin, plugin_library_path
-from drive_envelope._src.adapters.mujoco.spec import (
-    INPUTS,
-    MjDrive,
-    add_drive,
-    add_drives,
-    drive_state,
-    plugin_config,
-    rollout_operating_points,
+from drive_envelope._src.adapters.mujoco.mjcf import write_mjcf
+from drive_envelope._src.adapters.mujoco.params import (
+    DYNPRM_SLOTS,
+    NO_LIMIT,
+    PARAM_BOUND,
+    MjDriveInfo,
+    drive_dynprm,
+    get_envelope,
+    get_gains,
+    model_drives,
+    set_envelope,
+    set_gains,
 )
+from drive_envelope._src.adapters.mujoco.readout import drive_state, rollout_operating_points
+from drive_envelope._src.adapters.mujoco.spec import INPUTS, MjDrive, add_drive, add_drives, plugin_config
 from drive_envelope._src.adapters.mujoco.stand import stand_spec
 
 __all__ = [
     "BUILD_COMMAND",
+    "DYNPRM_SLOTS",
     "INPUTS",
+    "NO_LIMIT",
+    "PARAM_BOUND",
     "PLUGIN_NAME",
     "MjDrive",
+    "MjDriveInfo",
     "PluginError",
     "add_drive",
     "add_drives",
     "build_plugin",
+    "drive_dynprm",
     "drive_state",
+    "get_envelope",
+    "get_gains",
     "load_plugin",
+    "model_drives",
     "plugin_config",
     "plugin_library_path",
     "rollout_operating_points",
+    "set_envelope",
+    "set_gains",
     "stand_spec",
+    "write_mjcf",
 ]

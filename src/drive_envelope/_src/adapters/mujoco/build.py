@@ -44,7 +44,17 @@ class PluginError(DriveEnvelopeError, RuntimeError):
     """The MuJoCo plugin is missing, stale (another MuJoCo version) or cannot be built or loaded."""
 
 
-PLUGIN_SOURCES = ("CMakeLists.txt", "drive_math.h", "envelope.cc", "envelope.h", "exports.cc", "register.cc")
+PLUGIN_SOURCES = (
+    "CMakeLists.txt",
+    "coupled.cc",
+    "coupled.h",
+    "drive_math.h",
+    "envelope.cc",
+    "envelope.h",
+    "exports.cc",
+    "register.cc",
+    "solve.cc",
+)
 """The plugin's source files; a wheel ships them as ``drive_envelope/_plugin/mujoco`` (pyproject.toml)."""
 
 

@@ -22,7 +22,7 @@ from drive_envelope._src.adapters.mujoco.build import (
     library_name,
 )
 
-__all__ = ["ENV_VAR", "PLUGIN_NAME", "load_plugin", "plugin_library", "plugin_library_path"]
+__all__ = ["ENV_VAR", "PLUGIN_NAME", "load_plugin", "plugin_library", "plugin_library_path", "plugin_slot"]
 
 PLUGIN_NAME = "drive_envelope.envelope"
 """Name the plugin registers under (``<plugin plugin="drive_envelope.envelope">``)."""
@@ -31,11 +31,11 @@ ENV_VAR = "DRIVE_ENVELOPE_MUJOCO_PLUGIN"
 
 _LOCK = threading.Lock()
 _LOADED: dict[str, ctypes.CDLL] = {}
+_SLOT: list[int] = []  # MuJoCo's registry slot of the plugin, once loaded
 
 _PROBE = """<mujoco><extension><plugin plugin="drive_envelope.envelope"/></extension>
 <worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>
-<actuator><plugin joint="j" plugin="drive_envelope.envelope"><config key="stiffness" value="0"/>
-<config key="damping" value="0"/><config key="max_effort" value="1"/></plugin></actuator></mujoco>"""
+<actuator><plugin joint="j" plugin="drive_envelope.envelope" dynprm="1 -1 0 0 0 0"/></actuator></mujoco>"""
 
 
 def plugin_library_path() -> Path:
@@ -103,9 +103,10 @@ def load_plugin(path: str | os.PathLike[str] | None = None) -> Path:
             )
         mujoco.mj_loadPluginLibrary(key)  # the official entry point; a no-op for a loaded library
         try:
-            mujoco.MjModel.from_xml_string(_PROBE)
+            probe = mujoco.MjModel.from_xml_string(_PROBE)
         except ValueError as exc:
             raise PluginError(f"{library}: loaded but {PLUGIN_NAME!r} is not usable: {exc}") from None
+        _SLOT.append(int(probe.plugin[0]))
         _LOADED[key] = handle
     return library
 
@@ -114,3 +115,9 @@ def plugin_library() -> ctypes.CDLL:
     """The loaded plugin library as a ``ctypes.CDLL`` (loading it first), for its C entry points."""
     library = load_plugin()
     return _LOADED[str(library)]
+
+
+def plugin_slot() -> int:
+    """MuJoCo's registry slot of the plugin (``model.plugin[i]`` of its instances), loading it first."""
+    load_plugin()
+    return _SLOT[0]

@@ -1,14 +1,16 @@
-"""Adding PhysX drives with the envelope to a ``mujoco.MjSpec`` and reading them back.
+"""Adding PhysX drives with the envelope to a ``mujoco.MjSpec``.
 
 MuJoCo says "units are unspecified"; drive_envelope assumes SI throughout (radians, metres,
 seconds, kilograms), so a model must be written in SI for the envelope's numbers to mean what the
 datasheet says. Angles in the plugin are always radians, whatever ``<compiler angle>`` says.
 
-One drive is one hinge or slide joint of a plugin instance, fed by one actuator per control input
-(``pos``, ``vel``, ``ff``, in that order, MuJoCo's pid convention). The first actuator carries the
-drive's total effort (drive + feed-forward) in ``actuator_force``; the others are control channels
-with zero force. Joints with the same drive and envelope can share one instance
-(:func:`add_drives`), which MuJoCo steps faster than one instance per joint.
+One drive is one hinge or slide joint, fed by one actuator per control input (``pos``, ``vel``,
+``ff``, in that order, MuJoCo's pid convention). The first actuator carries the drive's total
+effort (drive + feed-forward) in ``actuator_force`` and its six numbers in ``actuator_dynprm``
+(:mod:`~drive_envelope._src.adapters.mujoco.params`); the others are control channels with zero
+force. Drives with the same inputs and drive type share one plugin instance
+(``drive_envelope_<inputs>``), whatever their envelopes: the plugin solves every drive of a model
+together anyway, and one instance costs MuJoCo least.
 """
 
 from __future__ import annotations
@@ -16,34 +18,28 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-import numpy.typing as npt
-
+from drive_envelope._src.adapters.mujoco.existing import (
+    KeyPlan,
+    convert_actuator,
+    joint_actuators,
+    update_keyframes,
+)
+from drive_envelope._src.adapters.mujoco.params import drive_dynprm
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.units import to_si
+from drive_envelope._src.values import read_quantity
 
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "INPUTS",
-    "MjDrive",
-    "add_drive",
-    "add_drives",
-    "drive_state",
-    "plugin_config",
-    "rollout_operating_points",
-]
+__all__ = ["INPUTS", "MjDrive", "add_drive", "add_drives", "default_instance", "plugin_config"]
 
 INPUTS = ("pos", "vel", "ff")
 """Control inputs in canonical order: target position, target velocity, feed-forward effort."""
 PLUGIN_NAME = "drive_envelope.envelope"
-
-FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -51,17 +47,17 @@ class MjDrive:
     """A drive added by :func:`add_drive`: the names to find it in the compiled model."""
 
     name: str
-    """Drive name: the first actuator (which carries the effort)."""
+    """Drive name: the first actuator (which carries the effort and the numbers)."""
     joint: str
     """The hinge or slide joint it drives."""
     instance: str
-    """The plugin instance (shared by the drives of one :func:`add_drives` call)."""
+    """The plugin instance (shared by every drive with the same inputs and drive type)."""
     actuators: tuple[str, ...]
     """One actuator per input, in the order of :attr:`inputs`; the first carries the effort."""
     inputs: tuple[str, ...]
     """Control inputs, a subset of ``("pos", "vel", "ff")`` in canonical order."""
     envelope: PerformanceEnvelope
-    """The performance envelope (joint side, SI)."""
+    """The performance envelope (joint side, SI) it was added with."""
     stiffness: float
     """Drive stiffness [N*m/rad or N/m] (force drive) or [1/s^2] (acceleration drive)."""
     damping: float
@@ -70,6 +66,8 @@ class MjDrive:
     """``"force"`` or ``"acceleration"``."""
     effort_sensor: str = ""
     """Name of the ``actuatorfrc`` sensor on the first actuator, empty if none was added."""
+    replaced: tuple[str, ...] = ()
+    """Names of the joint's actuators it replaced (``replace=True``); the first became :attr:`name`."""
 
     def control_index(self, model: mujoco.MjModel, name: str) -> int:
         """Index in ``data.ctrl`` of input ``name`` (``"pos"``, ``"vel"`` or ``"ff"``).
@@ -109,38 +107,23 @@ class MjDrive:
                 data.ctrl[self.control_index(model, name)] = value
 
 
-def _format(value: float) -> str:
-    # repr round-trips a float exactly through the plugin's strtod
-    return "inf" if math.isinf(value) else repr(float(value))
+def plugin_config(*, drive_type: DriveType = "force", inputs: Sequence[str] = ("pos",)) -> dict[str, str]:
+    """The ``<config>`` attributes of a plugin instance, as MJCF strings.
 
-
-def plugin_config(
-    envelope: PerformanceEnvelope,
-    *,
-    stiffness: float,
-    damping: float,
-    drive_type: DriveType = "force",
-    inputs: Sequence[str] = ("pos",),
-) -> dict[str, str]:
-    """The plugin's ``<config>`` attributes for a drive, as MJCF strings.
+    The numbers are not here: each drive has them in its actuator's ``dynprm``
+    (:func:`~drive_envelope._src.adapters.mujoco.params.drive_dynprm`).
 
     Args:
-        envelope: The performance envelope (joint side, SI).
-        stiffness: Drive stiffness [N*m/rad or N/m] (force) or [1/s^2] (acceleration), SI.
-        damping: Drive damping [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration), SI.
         drive_type: ``"force"`` or ``"acceleration"``.
         inputs: Control inputs, a subset of ``("pos", "vel", "ff")``.
     """
-    return {
-        "stiffness": _format(stiffness),
-        "damping": _format(damping),
-        "max_effort": _format(envelope.max_effort),
-        "max_actuator_velocity": _format(envelope.max_actuator_velocity),
-        "velocity_dependent_resistance": _format(envelope.velocity_dependent_resistance),
-        "speed_effort_gradient": _format(envelope.speed_effort_gradient),
-        "drive_type": drive_type,
-        "input": " ".join(inputs),
-    }
+    return {"drive_type": drive_type, "input": " ".join(inputs)}
+
+
+def default_instance(drive_type: DriveType, inputs: Sequence[str]) -> str:
+    """Name of the shared instance for drives with these inputs: ``drive_envelope_pos_vel`` etc."""
+    suffix = "_acceleration" if drive_type == "acceleration" else ""
+    return "drive_envelope_" + "_".join(inputs) + suffix
 
 
 def _read_inputs(inputs: Sequence[str] | str) -> tuple[str, ...]:
@@ -185,32 +168,41 @@ def add_drive(
     drive_type: DriveType = "force",
     inputs: Sequence[str] | str = ("pos",),
     name: str | None = None,
+    instance: str | None = None,
     effort_sensor: bool = True,
+    replace: bool = False,
 ) -> MjDrive:
     """Drive ``joint`` of ``spec`` with a PhysX drive limited by a performance envelope.
 
-    Adds one ``drive_envelope.envelope`` plugin instance, one actuator per input and (by default)
-    an ``actuatorfrc`` sensor named ``<name>_effort`` on the first actuator. Loads the plugin.
+    Adds one actuator per input to the plugin instance shared by drives with the same inputs (or
+    ``instance``), and by default an ``actuatorfrc`` sensor named ``<name>_effort`` on the first
+    actuator. Loads the plugin.
 
     Args:
         spec: The model being built; it must already contain ``joint`` (hinge or slide).
         joint: Joint name.
         stiffness: Drive stiffness, SI number or string with units ([N*m/rad or N/m]; [1/s^2] for
-            an acceleration drive).
+            an acceleration drive), at most 1e12 in SI.
         damping: Drive damping, SI number or string with units ([N*m*s/rad or N*s/m]; [1/s]).
         envelope: A :class:`PerformanceEnvelope`, or an envelope/datasheet file or catalog name.
         datasheet: A datasheet file or catalog name (instead of ``envelope``).
         drive_type: ``"force"`` or ``"acceleration"``.
         inputs: Control inputs, a subset of ``("pos", "vel", "ff")`` (default ``("pos",)``).
-        name: Drive name (default: the joint name); also the plugin instance and actuator name.
+        name: Drive (first actuator) name; default the joint's name, or the name of the actuator
+            it replaces.
+        instance: Plugin instance name (default ``drive_envelope_<inputs>``, shared).
         effort_sensor: Whether to add the ``actuatorfrc`` sensor (needed for rollouts).
+        replace: Replace the joint's existing actuators (the first is converted in place, keeping
+            its name and place in ``data.ctrl``; see
+            :mod:`~drive_envelope._src.adapters.mujoco.existing`). Without it an existing actuator
+            on the joint is an error: its force would bypass the envelope.
 
     Returns:
         The :class:`MjDrive` handle.
 
     Raises:
         InputError: unknown joint, a joint that is not a hinge or slide, an envelope for the other
-            joint type, bad gains or inputs.
+            joint type, bad gains or inputs, an existing actuator on the joint without ``replace``.
         PluginError: the plugin library is missing or stale.
     """
     drives = add_drives(
@@ -222,9 +214,10 @@ def add_drive(
         datasheet=datasheet,
         drive_type=drive_type,
         inputs=inputs,
-        instance=name or joint,
-        names=[name or joint],
+        instance=instance,
+        names=None if name is None else [name],
         effort_sensor=effort_sensor,
+        replace=replace,
     )
     return drives[0]
 
@@ -242,12 +235,9 @@ def add_drives(
     instance: str | None = None,
     names: Sequence[str] | None = None,
     effort_sensor: bool = True,
+    replace: bool = False,
 ) -> tuple[MjDrive, ...]:
-    """Drive several joints with the same drive and envelope through ONE plugin instance.
-
-    Same as :func:`add_drive` for each joint, but the joints share one plugin instance (one
-    ``<instance>`` with one ``<config>``), which costs MuJoCo less per step than one instance per
-    joint. Actuators are added joint by joint, each joint's inputs in canonical order.
+    """Drive several joints with the same drive and envelope: :func:`add_drive` for each joint.
 
     Args:
         spec: The model being built.
@@ -258,9 +248,10 @@ def add_drives(
         datasheet: See :func:`add_drive`.
         drive_type: See :func:`add_drive`.
         inputs: See :func:`add_drive`.
-        instance: Plugin instance name (default ``drives_<first joint>``).
-        names: Drive (first actuator) names, one per joint (default: the joint names).
+        instance: See :func:`add_drive`.
+        names: Drive (first actuator) names, one per joint (default: see :func:`add_drive`).
         effort_sensor: See :func:`add_drive`.
+        replace: See :func:`add_drive`.
 
     Returns:
         One :class:`MjDrive` per joint, in the order of ``joints``.
@@ -275,54 +266,71 @@ def add_drives(
 
     load_plugin()
     joints = list(joints)
-    labels = list(names) if names is not None else joints
+    labels: list[str | None] = list(names) if names is not None else [None] * len(joints)
     if not joints or len(set(joints)) != len(joints) or len(labels) != len(joints):
         raise InputError(
             f"add_drives: argument 'joints': expected distinct joint names and as many names, got {joints!r}"
         )
+    where = f"add_drive(joint={joints[0]!r})"
     env = _resolve_envelope(envelope, datasheet)
     joint_type = _joint_type(spec, joints[0], env)
     for joint in joints[1:]:
         _joint_type(spec, joint, env)
-    where = f"add_drive(joint={joints[0]!r})"
     if drive_type not in ("force", "acceleration"):
         raise InputError(
             f"{where}: argument 'drive_type': expected 'force' or 'acceleration', got {drive_type!r}"
         )
     k_unit, c_unit = _gain_units(joint_type, drive_type)
-    k = to_si(stiffness, k_unit, f"{where}: argument 'stiffness'")
-    c = to_si(damping, c_unit, f"{where}: argument 'damping'")
+    k = read_quantity(stiffness, k_unit, f"{where}: argument 'stiffness'")
+    c = read_quantity(damping, c_unit, f"{where}: argument 'damping'")
     for label, value, unit in (("stiffness", k, k_unit), ("damping", c, c_unit)):
-        if not math.isfinite(value) or value < 0.0:
+        if not math.isfinite(value) or not 0.0 <= value <= 1e12:
             raise InputError(
-                f"{where}: argument {label!r}: expected a finite number >= 0 [{unit}], got {value!r}"
+                f"{where}: argument {label!r}: expected a number in [0, 1e12] [{unit}], got {value!r}"
             )
+    dynprm = drive_dynprm(env, stiffness=k, damping=c, where=where)
     channels = _read_inputs(inputs)
-    instance_name = instance or f"drives_{joints[0]}"
+    existing = {joint: joint_actuators(spec, joint) for joint in joints}
+    for joint, found in existing.items():
+        if found and not replace:
+            first = found[0]
+            raise InputError(
+                f"add_drive(joint={joint!r}): joint {joint!r} already has actuator {first.name!r} "
+                f"({first.kind}), whose force would bypass the envelope; pass replace=True to replace "
+                "it, or add effort that counts through the drive's 'ff' input"
+            )
+    instance_name = instance or default_instance(drive_type, channels)
+    _ensure_instance(spec, instance_name, plugin_config(drive_type=drive_type, inputs=channels), where)
 
-    spec.activate_plugin(PLUGIN_NAME)
-    plugin = spec.add_plugin(name=instance_name, plugin_name=PLUGIN_NAME, active=True)
-    plugin.config = plugin_config(env, stiffness=k, damping=c, drive_type=drive_type, inputs=channels)
+    # the joints' qpos addresses, for keyframes whose controls change meaning
+    before = _compiled(spec) if replace and len(spec.keys) and any(existing.values()) else None
+    plan = KeyPlan(count=len(spec.actuators), deleted=set(), hold={}, appended=[])
     drives = []
-    for joint, label in zip(joints, labels, strict=True):
-        actuators = tuple(label if i == 0 else f"{label}_{n}" for i, n in enumerate(channels))
-        for actuator_name in actuators:
+    for joint, given in zip(joints, labels, strict=True):
+        found = existing[joint]
+        drive_name = given or (found[0].name if found and not found[0].name.startswith("#") else joint)
+        actuators = tuple(drive_name if i == 0 else f"{drive_name}_{n}" for i, n in enumerate(channels))
+        _check_free_names(spec, actuators, {a.index for a in found}, where)
+        start = 0
+        if found:
+            convert_actuator(
+                spec, found[0].index, name=actuators[0], instance=instance_name, dynprm=dynprm, where=where
+            )
+            if found[0].kind in ("motor", "velocity") or channels[0] != "pos":
+                plan.hold[found[0].index] = joint if channels[0] == "pos" else ""
+            plan.deleted.update(a.index for a in found[1:])
+            start = 1
+        for i, actuator_name in enumerate(actuators[start:], start):
             actuator = spec.add_actuator(name=actuator_name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            actuator.plugin = plugin
+            actuator.plugin.plugin_name = PLUGIN_NAME
             actuator.plugin.name = instance_name
             actuator.plugin.active = True
-        sensor = ""
-        if effort_sensor:
-            sensor = f"{label}_effort"
-            spec.add_sensor(
-                name=sensor,
-                type=mujoco.mjtSensor.mjSENS_ACTUATORFRC,
-                objtype=mujoco.mjtObj.mjOBJ_ACTUATOR,
-                objname=actuators[0],
-            )
+            if i == 0:
+                actuator.dynprm = dynprm
+            plan.appended.append((joint, channels[i]))
         drives.append(
             MjDrive(
-                name=label,
+                name=actuators[0],
                 joint=joint,
                 instance=instance_name,
                 actuators=actuators,
@@ -331,10 +339,64 @@ def add_drives(
                 stiffness=k,
                 damping=c,
                 drive_type=drive_type,
-                effort_sensor=sensor,
+                effort_sensor=_effort_sensor(spec, actuators[0]) if effort_sensor else "",
+                replaced=tuple(a.name for a in found),
             )
         )
+    for index in sorted(plan.deleted, reverse=True):
+        spec.delete(spec.actuators[index])
+    update_keyframes(spec, before, plan)
     return tuple(drives)
+
+
+def _compiled(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
+    try:
+        return spec.copy().compile()
+    except ValueError:
+        return None  # keyframe positions then read as 0: the model did not compile before the edit
+
+
+def _ensure_instance(spec: mujoco.MjSpec, name: str, config: dict[str, str], where: str) -> None:
+    """Use the instance ``name`` if it exists with the same configuration, else create it."""
+    spec.activate_plugin(PLUGIN_NAME)
+    for plugin in spec.plugins:
+        if plugin.name != name:
+            continue
+        current = dict(plugin.config)
+        current.setdefault("drive_type", "force")
+        current.setdefault("input", "pos")
+        if plugin.plugin_name != PLUGIN_NAME or current != config:
+            raise InputError(
+                f"{where}: argument 'instance': plugin instance {name!r} exists with another "
+                f"plugin or configuration ({plugin.plugin_name}, {dict(plugin.config)})"
+            )
+        return
+    plugin = spec.add_plugin(name=name, plugin_name=PLUGIN_NAME, active=True)
+    plugin.config = config
+
+
+def _check_free_names(spec: mujoco.MjSpec, names: Sequence[str], replaced: set[int], where: str) -> None:
+    taken = {a.name: i for i, a in enumerate(spec.actuators) if a.name}
+    for name in names:
+        if name in taken and taken[name] not in replaced:
+            raise InputError(
+                f"{where}: an actuator named {name!r} exists already; give the drive another name"
+            )
+
+
+def _effort_sensor(spec: mujoco.MjSpec, actuator: str) -> str:
+    """Add (or reuse) the ``actuatorfrc`` sensor ``<actuator>_effort``; returns its name."""
+    import mujoco
+
+    name = f"{actuator}_effort"
+    if spec.sensor(name) is None:
+        spec.add_sensor(
+            name=name,
+            type=mujoco.mjtSensor.mjSENS_ACTUATORFRC,
+            objtype=mujoco.mjtObj.mjOBJ_ACTUATOR,
+            objname=actuator,
+        )
+    return name
 
 
 def _joint_type(spec: mujoco.MjSpec, joint: str, env: PerformanceEnvelope) -> str:
@@ -342,7 +404,7 @@ def _joint_type(spec: mujoco.MjSpec, joint: str, env: PerformanceEnvelope) -> st
     import mujoco
 
     where = f"add_drive(joint={joint!r})"
-    element = spec.joint(joint)
+    element: Any = spec.joint(joint)
     if element is None:
         raise InputError(f"{where}: the spec has no joint named {joint!r}")
     kinds = {mujoco.mjtJoint.mjJNT_HINGE: "revolute", mujoco.mjtJoint.mjJNT_SLIDE: "prismatic"}
@@ -353,56 +415,3 @@ def _joint_type(spec: mujoco.MjSpec, joint: str, env: PerformanceEnvelope) -> st
     if env.joint != joint_type:
         raise InputError(f"{where}: the envelope is for a {env.joint} joint but {joint!r} is {joint_type}")
     return joint_type
-
-
-def _ids(model: mujoco.MjModel, drive: MjDrive) -> tuple[int, int]:
-    """(dof address, force address of the first actuator) of ``drive`` in ``model``."""
-    import mujoco
-
-    joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, drive.joint)
-    actuator = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, drive.actuators[0])
-    if joint < 0 or actuator < 0:
-        raise InputError(
-            f"drive {drive.name!r}: the model has no joint {drive.joint!r} or actuator {drive.actuators[0]!r}"
-        )
-    return int(model.jnt_dofadr[joint]), int(model.actuator_outadr[actuator])
-
-
-def drive_state(model: mujoco.MjModel, data: mujoco.MjData, drive: MjDrive) -> tuple[float, float]:
-    """The drive's operating point after ``mj_step``: (end-of-step velocity, step effort).
-
-    Returns:
-        ``(velocity [rad/s or m/s], total actuator effort [N*m or N])``, the point the envelope
-        bounds (PhysX evaluates it at the end-of-step velocity).
-    """
-    dof, out = _ids(model, drive)
-    return float(data.qvel[dof]), float(data.actuator_force[out])
-
-
-def rollout_operating_points(
-    model: mujoco.MjModel, drive: MjDrive, state: npt.ArrayLike, sensordata: npt.ArrayLike
-) -> tuple[FloatArray, FloatArray]:
-    """Operating points of ``drive`` from the outputs of ``mujoco.rollout.rollout``.
-
-    Args:
-        model: The compiled model.
-        drive: The drive (added with ``effort_sensor=True``).
-        state: Rollout states, ``(..., nstep, nstate)`` of ``mjSTATE_FULLPHYSICS``.
-        sensordata: Rollout sensor data, ``(..., nstep, nsensordata)``.
-
-    Returns:
-        ``(velocity, effort)`` arrays of shape ``(..., nstep)``: the velocity after each step
-        [rad/s or m/s] and that step's total actuator effort [N*m or N].
-    """
-    import mujoco
-
-    if not drive.effort_sensor:
-        raise InputError(f"drive {drive.name!r}: added without effort_sensor; rollouts need it")
-    sensor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, drive.effort_sensor)
-    dof, _ = _ids(model, drive)
-    states = np.asarray(state, dtype=np.float64)
-    sensors = np.asarray(sensordata, dtype=np.float64)
-    # mjSTATE_FULLPHYSICS starts with time, qpos, qvel
-    velocity = states[..., 1 + model.nq + dof]
-    effort = sensors[..., int(model.sensor_adr[sensor])]
-    return velocity, effort

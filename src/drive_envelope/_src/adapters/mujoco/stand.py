@@ -15,39 +15,73 @@ here (same model, one solve per step) and its metadata says so.
 from __future__ import annotations
 
 import math
-import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["UNLIMITED_EFFORT", "stand_spec", "simulate"]
+__all__ = ["MIN_INERTIA", "stand_spec", "simulate"]
 
-UNLIMITED_EFFORT = sys.float_info.max * 1e-10
-"""Stand-in for an unlimited ``max_effort`` [N*m or N]: PhysX skips the clamp, the plugin's clamp
-then never binds (the impulse ``max_effort*dt`` stays finite for any sane ``dt``)."""
+MIN_INERTIA = 1e-15
+"""Smallest inertia [kg*m^2 or kg] MuJoCo accepts for a moving body (its ``mjMINVAL``)."""
+_WARNINGS = ("mjWARN_INERTIA", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL")
 
 
-def _plugin_envelope(scenario: Scenario) -> tuple[PerformanceEnvelope, float, float]:
-    """Envelope, stiffness and damping the plugin gets for the scenario's drive.
+def _plugin_envelope(scenario: Scenario) -> tuple[PerformanceEnvelope, float, float, bool]:
+    """Envelope, stiffness, damping and "no effort limit" the plugin gets for the scenario's drive.
 
     PhysX's drive with ``maxForce = 0`` is off and leaves the applied effort unlimited: the plugin
-    gets zero gains and no limit, so its output is the feed-forward alone.
+    gets zero gains and no limit, so its output is the feed-forward alone. Without an effort limit
+    (PhysX skips the clamp) the plugin gets ``max_effort = -1`` (no limit).
     """
     drive = scenario.drive
+    unlimited = PerformanceEnvelope(max_effort=0.0, joint=scenario.joint.type)
     if drive.max_effort == 0.0:
-        return PerformanceEnvelope(max_effort=UNLIMITED_EFFORT, joint=scenario.joint.type), 0.0, 0.0
+        return unlimited, 0.0, 0.0, True
     envelope = scenario.effective_envelope()
     if envelope is None:
-        envelope = PerformanceEnvelope(max_effort=UNLIMITED_EFFORT, joint=scenario.joint.type)
-    return envelope, drive.stiffness, drive.damping
+        return unlimited, drive.stiffness, drive.damping, True
+    return envelope, drive.stiffness, drive.damping, False
+
+
+def _where(scenario: Scenario) -> str:
+    return f"scenario {scenario.name!r}" if scenario.name else "scenario"
+
+
+def _check(scenario: Scenario) -> None:
+    """Refuse what MuJoCo or the plugin cannot run, with the scenario key (before compiling)."""
+    where = _where(scenario)
+    inertia = scenario.joint.inertia
+    if inertia < MIN_INERTIA:
+        raise InputError(
+            f"{where}: key 'joint.inertia' = {inertia!r}: the mujoco engine needs at least "
+            f"{MIN_INERTIA:g} (MuJoCo's smallest inertia of a moving body)"
+        )
+    drive = scenario.drive
+    for key, value in (("drive.stiffness", drive.stiffness), ("drive.damping", drive.damping)):
+        if value > PARAM_BOUND:
+            raise InputError(f"{where}: key {key!r} = {value!r}: the mujoco engine takes at most 1e12 (SI)")
+    envelope = scenario.effective_envelope()
+    if envelope is not None:
+        for field in ("max_effort", "velocity_dependent_resistance", "speed_effort_gradient"):
+            value = getattr(envelope, field)
+            if value > PARAM_BOUND:
+                raise InputError(f"{where}: {field} = {value!r}: the mujoco engine takes at most 1e12 (SI)")
+        speed = envelope.max_actuator_velocity
+        if math.isfinite(speed) and speed > PARAM_BOUND:
+            raise InputError(
+                f"{where}: max_actuator_velocity = {speed!r}: the mujoco engine takes at most 1e12 "
+                "or inf (SI)"
+            )
 
 
 def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
@@ -68,7 +102,7 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
         body.mass, body.inertia = inertia, [1.0, 1.0, 1.0]
         joint_type = mujoco.mjtJoint.mjJNT_SLIDE
     body.add_joint(name="joint", type=joint_type, axis=[0.0, 0.0, 1.0])
-    envelope, stiffness, damping = _plugin_envelope(scenario)
+    envelope, stiffness, damping, unlimited = _plugin_envelope(scenario)
     drive = add_drive(
         spec,
         "joint",
@@ -80,6 +114,9 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
         name="drive",
         effort_sensor=False,
     )
+    if unlimited:
+        actuator = spec.actuator(drive.name)
+        actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
     return spec, drive
 
 
@@ -87,8 +124,15 @@ def simulate(scenario: Scenario) -> Trajectory:
     """Run the scenario in MuJoCo with the plugin; ``steps + 1`` rows, row 0 the initial state."""
     import mujoco
 
+    _check(scenario)
     spec, drive = stand_spec(scenario)
-    model = spec.compile()
+    # MuJoCo resets a diverging simulation (|v| > 1e10) and goes on: stop with an error instead
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    try:
+        model = spec.compile()
+    except ValueError as exc:
+        detail = " ".join(str(exc).split())
+        raise InputError(f"{_where(scenario)}: MuJoCo cannot build the test stand: {detail}") from None
     data = mujoco.MjData(model)
     data.qpos[0] = scenario.joint.initial_position
     data.qvel[0] = scenario.joint.initial_velocity
@@ -106,6 +150,7 @@ def simulate(scenario: Scenario) -> Trajectory:
     position[0], velocity[0] = data.qpos[0], data.qvel[0]
     for i in range(1, count + 1):
         mujoco.mj_step(model, data)
+        _raise_on_warning(scenario, data, i)
         position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
     return Trajectory(
         time=time,
@@ -117,6 +162,20 @@ def simulate(scenario: Scenario) -> Trajectory:
         name=scenario.name,
         metadata=_metadata(scenario),
     )
+
+
+def _raise_on_warning(scenario: Scenario, data: mujoco.MjData, step: int) -> None:
+    """Stop at the first step MuJoCo flagged (a NaN or a value above 1e10 in its state)."""
+    import mujoco
+
+    for name in _WARNINGS:
+        stat = data.warning[int(getattr(mujoco.mjtWarning, name))]
+        if stat.number > 0:
+            text = mujoco.mju_warningText(int(getattr(mujoco.mjtWarning, name)), int(stat.lastinfo))
+            raise InputError(
+                f"{_where(scenario)}: MuJoCo stopped at step {step} (t = {data.time:.6g} s): "
+                f"{text.rstrip('.')} (the state diverged: check dt, inertia, gains and loads)"
+            )
 
 
 def _metadata(scenario: Scenario) -> dict[str, object]:

@@ -1,0 +1,116 @@
+// Copyright 2026 The drive-envelope authors. BSD-3-Clause.
+//
+// The coupled drive solve of one step: every envelope drive of the model at once. A linear solve of
+// the unclamped laws, then Newton steps on the drives' own solves (each one PhysX's implicit drive
+// and clamp with the others held, as its articulation solver treats a drive row), then Gauss-Seidel
+// sweeps if needed. See README.md ("Control law") and docs/mujoco.md (the parameter layout).
+
+#ifndef DRIVE_ENVELOPE_PLUGIN_MUJOCO_COUPLED_H_
+#define DRIVE_ENVELOPE_PLUGIN_MUJOCO_COUPLED_H_
+
+#include <vector>
+
+#include <mujoco/mjdata.h>
+#include <mujoco/mjmodel.h>
+#include <mujoco/mjtype.h>
+
+#include "envelope.h"
+
+namespace drive_envelope::mujoco_plugin {
+
+// at most this many Newton steps per step, then at most this many Gauss-Seidel sweeps
+constexpr int kMaxNewton = 8;
+constexpr int kMaxSweeps = 50;
+
+// converged: no row's own solve moves its velocity by more than kTolerance * (1 + |v|) [rad/s or
+// m/s]; in Gauss-Seidel a row is solved again when another row's update moved it by more
+constexpr double kTolerance = 1e-12;
+
+// a drive that switches between letting go and a nonzero effort this many times in one solve
+// lets go for the rest of it (the release is the clamp's one jump; it could cycle)
+constexpr int kMaxFlips = 2;
+
+class CoupledSolver {
+ public:
+  CoupledSolver(const mjModel* m, Structure structure);
+
+  // writes every drive's total effort to d->actuator_force; returns the iterations (Newton steps
+  // plus Gauss-Seidel sweeps; 0 when the linear solve was inside every envelope)
+  int Compute(const mjModel* m, mjData* d);
+
+  // row solves (clamp evaluations) of the last Compute
+  int solves() const { return solves_; }
+
+ private:
+  // one unknown of the solve: a drive's DOF, or a damped DOF without a drive
+  struct Row {
+    int dof = -1;
+    int drive = -1;            // index in drives_, -1: a damped DOF without a drive
+    int self = 0;              // address in zd_ of the row's value at its own dof
+  };
+
+  // a dof that some row's chain holds: its off-diagonal entries of M, (qLD address, ancestor's
+  // address in zd_, address in map_ of where each member sits among the ancestor's) triples
+  struct Dof {
+    int first = 0;             // its first member row
+    int entry_adr = 0;
+    int entry_num = 0;
+  };
+
+  // a row's own solve: drive impulse x, damping impulse y, the drive's effort, and whether the
+  // envelope changed the request
+  struct RowResult {
+    double x = 0, y = 0, effort = 0;
+    bool clamped = false;
+  };
+
+  // per-step quantities of a drive row, read from the model and data
+  struct Request {
+    bool active = false;       // false: zero effort (disabled group, bad numbers, bad dt)
+    DriveParams params;
+    double target_pos = 0, target_vel = 0, ff = 0;
+  };
+
+  void Warn(int key, const char* format, const char* name, const char* detail);
+  void ReadRequests(const mjModel* m, mjData* d, double dt);
+  void SmoothVelocity(const mjModel* m, mjData* d, double dt);
+  void ImplicitDamping(const mjModel* m, const mjData* d, double dt);
+  void Response(const mjModel* m, const mjData* d);
+  void FreeVelocity(double dt, const mjData* d);
+  void Prepare(const mjData* d, double dt);
+  void LinearGuess();
+  RowResult RowSolve(int r, double rest, double dt, const mjData* d);
+  void Track(int r, const RowResult& result);
+  void Velocities();
+  bool Newton(const mjData* d, double dt, int* iterations);
+  int Sweep(const mjModel* m, const mjData* d, double dt);
+
+  std::vector<Drive> drives_;
+  std::vector<int> native_;
+  std::vector<Row> rows_;
+  int nrow_ = 0;
+  int solves_ = 0;
+
+  // static sparsity: for each dof, the rows whose chain (dof and its ancestors, where L^-T e_dof
+  // can be nonzero) holds it, member_row_[member_adr_[k] ...] (member_num_[k] of them)
+  std::vector<int> member_adr_, member_num_, member_row_;
+  std::vector<int> dofs_;        // dofs with members, descending
+  std::vector<Dof> dof_info_;    // per entry of dofs_
+  std::vector<int> entries_, map_;
+  bool contiguous_ = true;       // every dof's members are consecutive rows (depth-first order)
+
+  // scratch, reused every step
+  std::vector<Request> request_;
+  std::vector<mjtNum> force_, zd_;
+  std::vector<double> a_, vfree_, damp_, qvel_, x_, y_, v_, effort_;
+  std::vector<mjtNum> w_, lin_c_, lin_alpha_, q_, rhs_, sol_;
+  std::vector<int> free_, fixed_;
+  std::vector<char> stale_, warned_;
+  std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
+  std::vector<double> rest_, slope_;
+  std::vector<RowResult> result_;
+};
+
+}  // namespace drive_envelope::mujoco_plugin
+
+#endif  // DRIVE_ENVELOPE_PLUGIN_MUJOCO_COUPLED_H_

@@ -1,0 +1,336 @@
+// Copyright 2026 The drive-envelope authors. BSD-3-Clause.
+//
+// The coupled solve proper: the linear solve of the unclamped laws, Newton steps on the drives'
+// own solves, Gauss-Seidel sweeps (see coupled.h and README.md, "Control law").
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "coupled.h"
+
+namespace drive_envelope::mujoco_plugin {
+namespace {
+
+// whether a total impulse x and the end-of-step velocity v it gives lie inside the envelope by a
+// relative margin of 1e-9: then ClampDriveImpulse would return the request x unchanged
+bool Inside(const DriveParams& p, double dt, double x, double v) {
+  constexpr double kMargin = 1e-9;
+  double ax = std::fabs(x), av = std::fabs(v), xmax = p.max_effort * dt;
+  double vmax = p.max_actuator_velocity;
+  bool effort_ok = std::isinf(xmax) ||
+                   xmax - p.velocity_dependent_resistance * dt * av - ax > kMargin * xmax;
+  bool speed_ok = std::isinf(vmax) || vmax - p.speed_effort_gradient / dt * ax - av > kMargin * vmax;
+  return effort_ok && speed_ok;
+}
+
+// solves q*x = b in place (b becomes x) for a symmetric positive definite m x m row-major q,
+// by a right-looking Cholesky factorization (its updates are independent); false if q is not
+// positive definite
+bool CholeskySolve(double* q, double* b, int m) {
+  for (int k = 0; k < m; k++) {
+    double pivot = q[k * m + k];
+    if (!(pivot > mjMINVAL) || !std::isfinite(pivot)) return false;
+    double inverse = 1 / std::sqrt(pivot);
+    q[k * m + k] = inverse;  // the diagonal keeps 1/L_kk
+    for (int i = k + 1; i < m; i++) q[i * m + k] *= inverse;
+    for (int i = k + 1; i < m; i++) {
+      double lik = q[i * m + k];
+      for (int j = k + 1; j <= i; j++) q[i * m + j] -= lik * q[j * m + k];
+    }
+  }
+  for (int i = 0; i < m; i++) {  // L*y = b
+    for (int j = 0; j < i; j++) b[i] -= q[i * m + j] * b[j];
+    b[i] *= q[i * m + i];
+  }
+  for (int i = m - 1; i >= 0; i--) {  // L'*x = y
+    b[i] *= q[i * m + i];
+    for (int j = 0; j < i; j++) b[j] -= q[i * m + j] * b[i];
+  }
+  return true;
+}
+
+// solves a*x = b in place (b becomes x) for a general n x n row-major a, by Gaussian elimination
+// with partial pivoting; false if a is singular
+bool LuSolve(double* a, double* b, int n) {
+  for (int k = 0; k < n; k++) {
+    int best = k;
+    for (int i = k + 1; i < n; i++) {
+      if (std::fabs(a[i * n + k]) > std::fabs(a[best * n + k])) best = i;
+    }
+    if (!(std::fabs(a[best * n + k]) > mjMINVAL)) return false;
+    if (best != k) {
+      for (int j = 0; j < n; j++) std::swap(a[k * n + j], a[best * n + j]);
+      std::swap(b[k], b[best]);
+    }
+    double inverse = 1 / a[k * n + k];
+    for (int i = k + 1; i < n; i++) {
+      double factor = a[i * n + k] * inverse;
+      if (factor == 0) continue;
+      for (int j = k + 1; j < n; j++) a[i * n + j] -= factor * a[k * n + j];
+      b[i] -= factor * b[k];
+    }
+  }
+  for (int i = n - 1; i >= 0; i--) {
+    for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];
+    b[i] /= a[i * n + i];
+  }
+  return true;
+}
+
+}  // namespace
+
+void CoupledSolver::Prepare(const mjData* d, double dt) {
+  // each row's unclamped law is linear in its end-of-step velocity: w = c - alpha*v1, with w the
+  // row's total impulse (drive x plus implicit damping y); the clamp only ever shrinks x
+  int n = nrow_;
+  for (int r = 0; r < n; r++) {
+    double hd = dt * damp_[r];
+    double response = a_[r * n + r];
+    double reff = response / (1 + response * hd);
+    double c = hd * qvel_[r], alpha = hd;
+    int k = rows_[r].drive;
+    if (k >= 0 && request_[k].active) {
+      const Request& q = request_[k];
+      const DriveParams& p = q.params;
+      double a = dt * (dt * p.stiffness + p.damping);
+      double b = dt * p.stiffness * (q.target_pos - d->qpos[drives_[k].qpos]) +
+                 dt * p.damping * q.target_vel;
+      c += q.ff * dt;
+      if (drives_[k].drive_type == DriveType::kAcceleration) {
+        c += b / reff;  // J = (b - a*v1)/r: gains per unit inertia
+        alpha += a / reff;
+      } else if (reff > 0) {
+        c += b;  // J = b - a*v1: the spring-damper law at the end-of-step velocity
+        alpha += a;
+      }
+    }
+    lin_c_[r] = c;
+    lin_alpha_[r] = alpha;
+  }
+}
+
+void CoupledSolver::LinearGuess() {
+  // the solve's starting point: every row's unclamped law at once, (diag(1/alpha) + A) w = c/alpha
+  // - vfree (rows with alpha ~ 0 keep w = c); Newton and the sweeps then clamp and correct it, so
+  // a failed factorization only costs iterations: it falls back to one Jacobi step from vfree
+  int n = nrow_;
+  free_.clear();
+  fixed_.clear();
+  for (int r = 0; r < n; r++) {
+    w_[r] = lin_c_[r];
+    (lin_alpha_[r] * a_[r * n + r] > 1e-12 ? free_ : fixed_).push_back(r);
+  }
+  int m = static_cast<int>(free_.size());
+  if (m) {
+    for (int i = 0; i < m; i++) {
+      int r = free_[i];
+      double rhs = lin_c_[r] / lin_alpha_[r] - vfree_[r];
+      for (int s : fixed_) rhs -= a_[r * n + s] * lin_c_[s];
+      rhs_[i] = rhs;
+      for (int j = 0; j < m; j++) q_[i * m + j] = a_[r * n + free_[j]];
+      q_[i * m + i] += 1 / lin_alpha_[r];
+    }
+    if (CholeskySolve(q_.data(), rhs_.data(), m)) {
+      for (int i = 0; i < m; i++) w_[free_[i]] = rhs_[i];
+    } else {
+      for (int r = 0; r < n; r++) w_[r] = lin_c_[r] - lin_alpha_[r] * vfree_[r];
+    }
+  }
+  for (int r = 0; r < n; r++) {
+    if (!std::isfinite(w_[r])) w_[r] = 0;
+  }
+}
+
+CoupledSolver::RowResult CoupledSolver::RowSolve(int r, double rest, double dt, const mjData* d) {
+  solves_++;
+  double response = a_[r * nrow_ + r];
+
+  // implicit joint damping y = -h*D'*(v1 - qvel) folded in: v1 = base + reff*x, linear in x
+  double hd = dt * damp_[r];
+  double scale = 1 / (1 + response * hd);
+  double reff = response * scale;
+  double base = (rest + response * hd * qvel_[r]) * scale;
+
+  RowResult out;
+  int k = rows_[r].drive;
+  if (k >= 0 && request_[k].active && flips_[r] < kMaxFlips) {
+    const Request& q = request_[k];
+    const DriveParams& p = q.params;
+    const Drive& drive = drives_[k];
+
+    // implicit PD impulse at the velocity with the feed-forward applied, then the envelope clamp
+    // on the TOTAL actuator impulse (drive + ff), evaluated at the end-of-step velocity
+    double ff = q.ff * dt;
+    double v0 = base + reff * ff;
+    double error = q.target_pos - d->qpos[drive.qpos];
+    double request = ff + dt * ImplicitDriveEffort(p.stiffness, p.damping, error, v0, q.target_vel,
+                                                   reff, dt, drive.drive_type);
+    double x = ClampDriveImpulse<double>(v0, ff, request, reff, p.max_actuator_velocity,
+                                         p.max_effort * dt, p.speed_effort_gradient / dt,
+                                         p.velocity_dependent_resistance * dt);
+
+    // NaN or overflowing states: the drive lets go instead of writing NaN; and (x*dt)/dt can
+    // round one ulp above the request: the clamp never grows a request, nor may we
+    double effort = std::isfinite(x) ? x / dt : 0;
+    double limit = std::fabs(request / dt);
+    effort = std::fabs(effort) < limit ? effort : std::copysign(limit, effort);
+    out.effort = std::isfinite(effort) ? effort : 0;
+    out.x = std::isfinite(x) ? x : 0;
+    out.clamped = out.x != request;
+  }
+  out.y = -hd * (base + reff * out.x - qvel_[r]);
+  if (!std::isfinite(out.y)) out.y = 0;
+  return out;
+}
+
+void CoupledSolver::Track(int r, const RowResult& result) {
+  // letting go (0) is the one jump of the clamp: a drive that the others push back and forth
+  // across it could cycle forever, so after kMaxFlips it stays let go for the rest of the step
+  // (0 is always consistent: inside the envelope, or released above its no-load speed)
+  int k = rows_[r].drive;
+  if (k < 0 || !request_[k].active) return;
+  int zero = result.x == 0;
+  if (released_[r] >= 0 && zero != released_[r]) flips_[r]++;
+  released_[r] = zero;
+  effort_[k] = result.effort;
+}
+
+void CoupledSolver::Velocities() {
+  // v = vfree + A*(x + y), column by column (independent updates)
+  int n = nrow_;
+  for (int r = 0; r < n; r++) v_[r] = vfree_[r];
+  for (int s = 0; s < n; s++) {
+    double ws = x_[s] + y_[s];
+    if (ws == 0) continue;
+    const double* column = a_.data() + s * n;  // A is symmetric: row s is column s
+    for (int r = 0; r < n; r++) v_[r] += column[r] * ws;
+  }
+}
+
+bool CoupledSolver::Newton(const mjData* d, double dt, int* iterations) {
+  // Newton's method on the fixed point w_r = G_r(rest_r(w)), where G_r is a row's own solve
+  // (PD, clamp, damping) as a function of the velocity the other rows give it,
+  // rest_r = vfree_r + sum_{s != r} A_rs w_s. G_r is piecewise linear: its slope is
+  // -alpha/(1 + alpha*A_rr) where the clamp did not bind, else measured (the clamp is only ever
+  // evaluated, never rewritten). Each step solves (I - diag(slope)*A_off) w = G - slope*(rest - vfree)
+  int n = nrow_;
+  for (int it = 0; it < kMaxNewton; it++) {
+    double residual = 0;
+    for (int r = 0; r < n; r++) {
+      double response = a_[r * n + r];
+      double held = x_[r] + y_[r];
+      rest_[r] = v_[r] - response * held;
+      result_[r] = RowSolve(r, rest_[r], dt, d);
+      Track(r, result_[r]);
+      double g = result_[r].x + result_[r].y;
+      residual = std::fmax(residual, std::fabs(g - held) * response / (1 + std::fabs(v_[r])));
+    }
+    *iterations = it + 1;
+    if (!(residual > kTolerance)) {
+      for (int r = 0; r < n; r++) {
+        x_[r] = result_[r].x;
+        y_[r] = result_[r].y;
+      }
+      Velocities();
+      return true;
+    }
+    for (int r = 0; r < n; r++) {
+      double response = a_[r * n + r];
+      if (flips_[r] >= kMaxFlips) {  // let go: only its damping responds
+        slope_[r] = -dt * damp_[r] / (1 + response * dt * damp_[r]);
+        continue;
+      }
+      if (!result_[r].clamped) {
+        slope_[r] = -lin_alpha_[r] / (1 + lin_alpha_[r] * response);
+        continue;
+      }
+      // a clamped row: the slope on the side where it is smaller (away from a kink)
+      double step = 1e-7 * (1 + std::fabs(rest_[r]));
+      double up = RowSolve(r, rest_[r] + step, dt, d).x, down = RowSolve(r, rest_[r] - step, dt, d).x;
+      double hd = dt * damp_[r], shrink = 1 / (1 + response * hd);
+      double rise = (up - result_[r].x) / step, fall = (result_[r].x - down) / step;
+      double slope_x = std::fabs(rise) < std::fabs(fall) ? rise : fall;
+      // y = -hd*(base + reff*x - qvel), base and reff as in RowSolve
+      slope_[r] = slope_x - hd * (shrink + response * shrink * slope_x);
+    }
+    for (int r = 0; r < n; r++) {
+      const double* row = a_.data() + r * n;
+      for (int s = 0; s < n; s++) q_[r * n + s] = (s == r ? 1 : 0) - (s == r ? 0 : slope_[r] * row[s]);
+      rhs_[r] = result_[r].x + result_[r].y - slope_[r] * (rest_[r] - vfree_[r]);
+    }
+    if (!LuSolve(q_.data(), rhs_.data(), n)) return false;
+    for (int r = 0; r < n; r++) {
+      if (!std::isfinite(rhs_[r])) return false;
+      // keep the split of the new total impulse; only the sum matters for the next step
+      x_[r] = rhs_[r];
+      y_[r] = 0;
+    }
+    Velocities();
+  }
+  return false;
+}
+
+int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
+  int n = nrow_;
+
+  // split the starting impulses into drive and damping parts at their predicted velocities; a
+  // drive whose unclamped impulse is inside its envelope is done unless another row moves it
+  LinearGuess();
+  for (int r = 0; r < n; r++) {
+    x_[r] = w_[r];
+    y_[r] = 0;
+  }
+  Velocities();
+  bool any = false;
+  for (int r = 0; r < n; r++) {
+    double v1 = v_[r];
+    int k = rows_[r].drive;
+    bool drive = k >= 0 && request_[k].active;
+    y_[r] = drive ? -dt * damp_[r] * (v1 - qvel_[r]) : w_[r];
+    x_[r] = drive ? w_[r] - y_[r] : 0;
+    any |= drive && !Inside(request_[k].params, dt, x_[r], v1);
+    released_[r] = -1;
+    flips_[r] = 0;
+    if (drive) effort_[k] = x_[r] / dt;
+  }
+  if (!any) return 0;
+
+  // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
+  int iterations = 0;
+  if (Newton(d, dt, &iterations)) return iterations;
+  for (int r = 0; r < n; r++) stale_[r] = 1;
+  int sweeps = 0;
+  for (; sweeps < kMaxSweeps; sweeps++) {
+    bool solved = false;
+    for (int r = 0; r < n; r++) {
+      if (!stale_[r]) continue;
+      stale_[r] = 0;
+      solved = true;
+      double response = a_[r * n + r];
+      double held = x_[r] + y_[r];
+      double rest = v_[r] - response * held;  // velocity without this row's own impulses
+      RowResult result = RowSolve(r, rest, dt, d);
+      Track(r, result);
+      double delta = result.x + result.y - held;
+      x_[r] = result.x;
+      y_[r] = result.y;
+      v_[r] = rest + response * (result.x + result.y);
+      if (delta == 0 || !std::isfinite(delta)) continue;
+      const double* column = a_.data() + r * n;
+      for (int s = 0; s < n; s++) {
+        double dv = column[s] * delta;
+        if (s == r || dv == 0) continue;
+        v_[s] += dv;
+        if (std::fabs(dv) > kTolerance * (1 + std::fabs(v_[s]))) stale_[s] = 1;
+      }
+    }
+    if (!solved) break;
+  }
+  return iterations + sweeps;
+}
+
+}  // namespace drive_envelope::mujoco_plugin

@@ -1,0 +1,220 @@
+"""The actuators a model already has on a joint: what they are, their gains, replacing them.
+
+A second actuator on a driven joint would add force the envelope never sees, so a drive replaces
+the joint's actuators (``add_drive(..., replace=True)``, ``drive-envelope mujoco apply``). The first
+is converted in place into the drive's effort actuator: it keeps its name, place (so ``data.ctrl``
+keeps its layout), group, delay and control range, and becomes a plugin actuator of the main
+default class (so no class of the robot can give it a ``forcerange`` or a ``biastype``); the others
+are deleted. Keyframe controls follow: a deleted actuator's column goes, a new input's column is
+added (the joint's key position for ``pos``, 0 for ``vel`` and ``ff``), and a motor's torque
+becomes the joint's key position.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from drive_envelope._src.errors import InputError
+
+if TYPE_CHECKING:
+    import mujoco
+
+__all__ = [
+    "ExistingActuator",
+    "KeyPlan",
+    "convert_actuator",
+    "gain_kind",
+    "is_drive",
+    "joint_actuators",
+    "update_keyframes",
+]
+
+PLUGIN_NAME = "drive_envelope.envelope"
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ExistingActuator:
+    """An actuator with a joint transmission on a joint that is to be driven."""
+
+    index: int
+    """Position in ``spec.actuators`` (and in ``data.ctrl`` order)."""
+    name: str
+    """Its name, or ``#index`` if it has none."""
+    kind: str
+    """``"position"`` (PD on a target position), ``"velocity"`` (damper on a target velocity),
+    ``"motor"`` (force from ctrl), ``"drive"`` (already this plugin) or ``"other"``."""
+    stiffness: float | None
+    """Its position gain kp [N*m/rad or N/m], None if it has none."""
+    damping: float | None
+    """Its velocity gain kv [N*m*s/rad or N*s/m], None if it has none."""
+
+
+def is_drive(spec: mujoco.MjSpec, actuator: Any) -> bool:
+    """Whether an ``MjsActuator`` is an actuator of this plugin (directly or through an instance)."""
+    if not actuator.plugin.active:
+        return False
+    if actuator.plugin.plugin_name:
+        return bool(actuator.plugin.plugin_name == PLUGIN_NAME)
+    return any(p.name == actuator.plugin.name and p.plugin_name == PLUGIN_NAME for p in spec.plugins)
+
+
+def _kind(spec: mujoco.MjSpec, actuator: Any) -> tuple[str, float | None, float | None]:
+    """(kind, kp, kv) of an ``MjsActuator`` from its gain and bias (MuJoCo's shortcuts' layout)."""
+    if is_drive(spec, actuator):
+        return "drive", float(actuator.dynprm[4]), float(actuator.dynprm[5])
+    if actuator.plugin.active:
+        return "other", None, None
+    return gain_kind(
+        int(actuator.gaintype), int(actuator.biastype), list(actuator.gainprm), list(actuator.biasprm)
+    )
+
+
+def gain_kind(
+    gaintype: int, biastype: int, gainprm: list[float], biasprm: list[float]
+) -> tuple[str, float | None, float | None]:
+    """(kind, kp, kv) of a native actuator from its gain and bias (MuJoCo's shortcuts' layout)."""
+    import mujoco
+
+    fixed = gaintype == int(mujoco.mjtGain.mjGAIN_FIXED)
+    if fixed and biastype == int(mujoco.mjtBias.mjBIAS_NONE):
+        return "motor", None, None
+    if fixed and biastype == int(mujoco.mjtBias.mjBIAS_AFFINE) and biasprm[0] == 0:
+        kp, kv = gainprm[0], -biasprm[2]
+        if kp > 0 and biasprm[1] == -kp and kv >= 0:
+            return "position", kp, kv  # position, general affine PD: kp*(u - q) - kv*qdot
+        if kp > 0 and biasprm[1] == 0 and kv == kp:
+            return "velocity", 0.0, kp  # velocity: kv*(u - qdot)
+    return "other", None, None
+
+
+def joint_actuators(spec: mujoco.MjSpec, joint: str) -> list[ExistingActuator]:
+    """The actuators of ``spec`` with a joint transmission on ``joint``, in model order."""
+    import mujoco
+
+    found = []
+    for index, actuator in enumerate(spec.actuators):
+        if actuator.target != joint or actuator.trntype not in (
+            mujoco.mjtTrn.mjTRN_JOINT,
+            mujoco.mjtTrn.mjTRN_JOINTINPARENT,
+        ):
+            continue
+        kind, kp, kv = _kind(spec, actuator)
+        found.append(
+            ExistingActuator(
+                index=index, name=actuator.name or f"#{index}", kind=kind, stiffness=kp, damping=kv
+            )
+        )
+    return found
+
+
+def _joint_range(spec: mujoco.MjSpec, joint: str) -> tuple[float, float] | None:
+    """The joint's range in radians (or metres), None if it is not limited."""
+    import mujoco
+
+    element = spec.joint(joint)
+    low, high = float(element.range[0]), float(element.range[1])
+    if element.limited == mujoco.mjtLimited.mjLIMITED_FALSE or not low < high:
+        return None
+    hinge = element.type == mujoco.mjtJoint.mjJNT_HINGE
+    if hinge and spec.compiler.degree:
+        return math.radians(low), math.radians(high)
+    return low, high
+
+
+def convert_actuator(
+    spec: mujoco.MjSpec, index: int, *, name: str, instance: str, dynprm: list[float], where: str
+) -> None:
+    """Turn actuator ``index`` into the effort actuator of a drive on its joint, in place.
+
+    Raises:
+        InputError: a gear other than 1 (the drive works on the joint side).
+    """
+    import mujoco
+
+    actuator = spec.actuators[index]
+    kind, _, _ = _kind(spec, actuator)
+    gear = list(actuator.gear)
+    if gear[0] != 1 or any(gear[1:]):
+        raise InputError(
+            f"{where}: actuator {actuator.name or index!r} has gear {gear[0]:g}; a drive works on the "
+            "joint side (gear 1): scale its gains and envelope by the gear and set gear to 1 first"
+        )
+    if actuator.dyntype != mujoco.mjtDyn.mjDYN_NONE:
+        warnings.warn(
+            f"{where}: actuator {actuator.name or index!r} had activation dynamics "
+            f"({str(actuator.dyntype.name).removeprefix('mjDYN_').lower()}); the drive has none",
+            stacklevel=4,
+        )
+    ctrlrange = [float(v) for v in actuator.ctrlrange]
+    limited = actuator.ctrllimited
+    if kind == "motor":
+        # its control was a force; now it is a target position: the joint's range, if any
+        joint_range = _joint_range(spec, actuator.target)
+        limited = (
+            mujoco.mjtLimited.mjLIMITED_FALSE if joint_range is None else mujoco.mjtLimited.mjLIMITED_TRUE
+        )
+        ctrlrange = [0.0, 0.0] if joint_range is None else list(joint_range)
+    actuator.classname = spec.default
+    actuator.name = name
+    actuator.plugin.plugin_name = PLUGIN_NAME
+    actuator.plugin.name = instance
+    actuator.plugin.active = True
+    actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    actuator.gainprm = [1.0] + [0.0] * 9
+    actuator.biastype = mujoco.mjtBias.mjBIAS_NONE
+    actuator.biasprm = [0.0] * 10
+    actuator.dyntype = mujoco.mjtDyn.mjDYN_NONE
+    actuator.actdim = -1
+    actuator.dynprm = dynprm
+    actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    actuator.forcerange = [0.0, 0.0]
+    actuator.ctrllimited = limited
+    actuator.ctrlrange = ctrlrange
+
+
+@dataclass(kw_only=True, slots=True)
+class KeyPlan:
+    """How the actuator list changes, to rewrite every keyframe's ``ctrl`` to match."""
+
+    count: int
+    """Number of actuators before the change."""
+    deleted: set[int]
+    """Positions (before the change) of deleted actuators."""
+    hold: dict[int, str]
+    """Positions of converted motors -> their joint (the key's position of the joint replaces the torque)."""
+    appended: list[tuple[str, str]]
+    """New actuators, in order: (joint, input)."""
+
+
+def update_keyframes(spec: mujoco.MjSpec, model: mujoco.MjModel | None, plan: KeyPlan) -> None:
+    """Rewrite every keyframe's ``ctrl`` for the new actuator list (see :class:`KeyPlan`).
+
+    Args:
+        spec: The edited spec.
+        model: The model compiled before the edit (for the joints' qpos addresses), or None.
+        plan: What changed.
+    """
+    import mujoco
+
+    for key in spec.keys:
+        ctrl = [float(v) for v in key.ctrl]
+        if len(ctrl) != plan.count:
+            continue  # no ctrl in this key (MuJoCo uses the defaults) or already inconsistent
+        qpos = [float(v) for v in key.qpos]
+
+        def position(joint: str, qpos: list[float] = qpos) -> float:
+            if model is None or not qpos:
+                return 0.0
+            index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)
+            return qpos[int(model.jnt_qposadr[index])] if index >= 0 else 0.0
+
+        kept = [
+            position(plan.hold[i]) if i in plan.hold else v
+            for i, v in enumerate(ctrl)
+            if i not in plan.deleted
+        ]
+        added = [position(joint) if name == "pos" else 0.0 for joint, name in plan.appended]
+        key.ctrl = kept + added

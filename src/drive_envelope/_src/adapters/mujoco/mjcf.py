@@ -1,0 +1,384 @@
+"""Equip an MJCF robot with envelope drives, and list a model's drives (``drive-envelope mujoco``).
+
+``apply`` reads the robot with ``mujoco.MjSpec``, gives each chosen joint a drive through
+:func:`~drive_envelope._src.adapters.mujoco.spec.add_drive` with ``replace=True`` (the joint's
+actuator becomes the drive in place: same name, same ``data.ctrl`` slot, keyframes kept), and
+writes a new MJCF that loads in stock MuJoCo once the plugin library is loaded. The gains come
+from the replaced actuator unless given: ``position`` and ``general`` PD actuators give kp and kv
+(their control stays a target position), ``velocity`` actuators kv (a target velocity); a
+``motor`` has none, so its joint needs ``stiffness`` and ``damping``.
+
+MuJoCo's MJCF writer keeps 6 significant digits and drops comments and ``<include>`` structure;
+the drives' ``dynprm`` are rewritten here with every digit, and asset folders are re-pointed
+relative to the output file. The file is compiled from its final folder before it replaces
+anything.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import warnings
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from drive_envelope._src.adapters.mujoco.existing import joint_actuators
+from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+
+if TYPE_CHECKING:
+    import mujoco
+
+__all__ = [
+    "Assignment",
+    "EquippedJoint",
+    "apply_drives",
+    "driven_joints",
+    "load_spec",
+    "mujoco_warnings",
+    "other_actuators",
+    "read_model",
+    "uses_plugin",
+    "write_mjcf",
+]
+
+PLUGIN_NAME = "drive_envelope.envelope"
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Assignment:
+    """One joint to drive, with its envelope and where that came from (for messages)."""
+
+    joint: str
+    """Joint name (hinge or slide)."""
+    envelope: PerformanceEnvelope
+    """Its envelope (SI)."""
+    where: str = ""
+    """The map key or flag the envelope came from."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class EquippedJoint:
+    """What :func:`apply_drives` did to one joint."""
+
+    joint: str
+    """The joint."""
+    drive: str
+    """Name of the drive's effort actuator."""
+    inputs: tuple[str, ...]
+    """The drive's control inputs."""
+    envelope: PerformanceEnvelope
+    """The envelope written (SI)."""
+    stiffness: float
+    """Drive stiffness [N*m/rad or N/m]."""
+    damping: float
+    """Drive damping [N*m*s/rad or N*s/m]."""
+    replaced: str
+    """What it replaced, e.g. ``"position 'actuator1'"``, or ``""``."""
+    gains_from: str
+    """Where the gains came from: the replaced actuator, or the arguments."""
+
+
+def load_spec(path: str | os.PathLike[str]) -> mujoco.MjSpec:
+    """Parse an MJCF file into an ``MjSpec``.
+
+    Raises:
+        InputError: no such file, or MuJoCo cannot parse it (its message, on one line).
+    """
+    import mujoco
+
+    name = os.fspath(path)
+    if not Path(name).is_file():
+        raise InputError(f"{name}: no such MJCF file")
+    try:
+        return mujoco.MjSpec.from_file(name)
+    except ValueError as exc:
+        raise InputError(f"{name}: MuJoCo cannot read it: {' '.join(str(exc).split())}") from None
+
+
+@contextlib.contextmanager
+def mujoco_warnings() -> Iterator[None]:
+    """Turn MuJoCo's warnings (``mju_warning``, e.g. the plugin's) into Python warnings meanwhile.
+
+    MuJoCo prints them on stdout; the command line prints Python warnings as one stderr line each.
+    """
+    import mujoco
+
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda message: warnings.warn(" ".join(str(message).split()), stacklevel=2))
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def _load_plugin_if_used(text: str) -> None:
+    """Load the plugin; a model that does not use it compiles without it."""
+    from drive_envelope._src.adapters.mujoco.build import PluginError
+    from drive_envelope._src.adapters.mujoco.loader import load_plugin
+
+    try:
+        load_plugin()
+    except PluginError:
+        if PLUGIN_NAME in text:
+            raise
+
+
+def read_model(path: str | os.PathLike[str]) -> mujoco.MjModel:
+    """Compile an MJCF file (loading the plugin if it uses it).
+
+    Raises:
+        InputError: the file cannot be read or compiled (MuJoCo's or the plugin's message).
+        PluginError: the model uses the plugin and it is not built.
+    """
+    import mujoco
+
+    name = os.fspath(path)
+    if not Path(name).is_file():
+        raise InputError(f"{name}: no such MJCF file")
+    _load_plugin_if_used(Path(name).read_text(encoding="utf-8", errors="replace"))
+    try:
+        with mujoco_warnings():
+            return mujoco.MjModel.from_xml_path(name)
+    except ValueError as exc:
+        raise InputError(f"{name}: MuJoCo cannot compile it: {' '.join(str(exc).split())}") from None
+
+
+def uses_plugin(model: mujoco.MjModel) -> bool:
+    """Whether a compiled model has instances of the plugin (False if it was never loaded)."""
+    from drive_envelope._src.adapters.mujoco.build import PluginError
+    from drive_envelope._src.adapters.mujoco.loader import plugin_slot
+
+    if not model.nplugin:
+        return False
+    try:
+        slot = plugin_slot()
+    except PluginError:
+        return False  # a model using it would not have compiled
+    return any(int(p) == slot for p in model.plugin)
+
+
+def other_actuators(model: mujoco.MjModel, drives: Sequence[Any]) -> list[tuple[str, str, str]]:
+    """(joint, actuator, kind) of the actuators with a joint transmission that are not drives."""
+    import mujoco
+
+    from drive_envelope._src.adapters.mujoco.existing import gain_kind
+
+    ours = {a for d in drives for a in d.actuators}
+    joint_transmissions = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+    found = []
+    for i in range(model.nu):
+        if i in ours or int(model.actuator_trntype[i]) not in joint_transmissions:
+            continue
+        joint = int(model.actuator_trnid[i, 0])
+        kind = "plugin" if int(model.actuator_plugin[i]) >= 0 else gain_kind(
+            int(model.actuator_gaintype[i]), int(model.actuator_biastype[i]),
+            list(model.actuator_gainprm[i]), list(model.actuator_biasprm[i]),
+        )[0]  # fmt: skip
+        found.append(
+            (
+                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, joint) or f"#{joint}",
+                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) or f"#{i}",
+                kind,
+            )
+        )
+    return found
+
+
+def driven_joints(spec: mujoco.MjSpec) -> list[str]:
+    """Names of the spec's hinge and slide joints (the joints a drive can take), in model order."""
+    import mujoco
+
+    kinds = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+    return [joint.name for joint in spec.joints if joint.type in kinds and joint.name]
+
+
+def _inputs_of_instance(spec: mujoco.MjSpec, instance: str) -> tuple[str, ...]:
+    for plugin in spec.plugins:
+        if plugin.name == instance:
+            words = str(dict(plugin.config).get("input", "pos")).replace(",", " ").split()
+            return tuple(name for name in ("pos", "vel", "ff") if name in words) or ("pos",)
+    return ("pos",)
+
+
+def apply_drives(
+    spec: mujoco.MjSpec,
+    assignments: Sequence[Assignment],
+    *,
+    stiffness: float | str | None = None,
+    damping: float | str | None = None,
+) -> list[EquippedJoint]:
+    """Give each assigned joint a drive, replacing its actuators (see the module docstring).
+
+    Args:
+        spec: The robot, edited in place (callers write nothing on an error).
+        assignments: Joints and envelopes.
+        stiffness: Drive stiffness for every joint [N*m/rad or N/m]; None keeps each replaced
+            actuator's kp.
+        damping: Drive damping for every joint [N*m*s/rad or N*s/m]; None keeps each kv.
+
+    Raises:
+        InputError: an unknown joint, a joint whose actuator has no gains when none are given, or
+            anything :func:`add_drive` refuses, naming the joint.
+    """
+    from drive_envelope._src.adapters.mujoco.spec import add_drive
+
+    joints = driven_joints(spec)
+    done = []
+    for item in assignments:
+        if item.joint not in joints:
+            import difflib
+
+            close = difflib.get_close_matches(item.joint, joints, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise InputError(
+                f"{item.where or item.joint}: the model has no hinge or slide joint named "
+                f"{item.joint!r}{hint}"
+            )
+        existing = joint_actuators(spec, item.joint)
+        first = existing[0] if existing else None
+        inputs: tuple[str, ...] = ("pos",)
+        if first is not None and first.kind == "velocity":
+            inputs = ("vel",)
+        elif first is not None and first.kind == "drive":
+            actuator: Any = spec.actuators[first.index]
+            inputs = _inputs_of_instance(spec, actuator.plugin.name)
+        k = stiffness if stiffness is not None else (first.stiffness if first else None)
+        c = damping if damping is not None else (first.damping if first else None)
+        if k is None or c is None:
+            what = f"its actuator {first.name!r} is a {first.kind}" if first else "it has no actuator"
+            raise InputError(
+                f"{item.where or item.joint}: joint {item.joint!r}: {what} (no position gains to keep); "
+                "give --stiffness and --damping"
+            )
+        drive = add_drive(
+            spec,
+            item.joint,
+            envelope=item.envelope,
+            stiffness=k,
+            damping=c,
+            inputs=inputs,
+            effort_sensor=False,
+            replace=True,
+        )
+        given = "given" if stiffness is not None and damping is not None else ""
+        source = given or (f"{first.kind} {first.name!r}" if first else "given")
+        done.append(
+            EquippedJoint(
+                joint=item.joint,
+                drive=drive.name,
+                inputs=drive.inputs,
+                envelope=item.envelope,
+                stiffness=drive.stiffness,
+                damping=drive.damping,
+                replaced=f"{first.kind} {first.name!r}" if first else "",
+                gains_from=source,
+            )
+        )
+    return done
+
+
+def _exact_dynprm(xml: str, spec: mujoco.MjSpec) -> str:
+    """MuJoCo writes numbers with 6 digits: put every digit back into the drives' ``dynprm``."""
+    from drive_envelope._src.adapters.mujoco.existing import is_drive
+
+    exact = {}
+    for actuator in spec.actuators:
+        if actuator.name and is_drive(spec, actuator):
+            values = [float(v) for v in actuator.dynprm]
+            while len(values) > 1 and values[-1] == 0.0:
+                values.pop()
+            exact[actuator.name] = " ".join(repr(v) if v != int(v) else str(int(v)) for v in values)
+
+    def fix(match: re.Match[str]) -> str:
+        tag = match.group(0)
+        name = re.search(r'\bname="([^"]*)"', tag)
+        if not name or name.group(1) not in exact:
+            return tag
+        text = f'dynprm="{exact[name.group(1)]}"'
+        if re.search(r'\bdynprm="[^"]*"', tag):
+            return re.sub(r'\bdynprm="[^"]*"', text, tag)
+        return tag.replace("<plugin ", f"<plugin {text} ", 1)
+
+    # only inside <actuator>: sensors may be named like actuators
+    def section(match: re.Match[str]) -> str:
+        return re.sub(r"<plugin\b[^>]*>", fix, match.group(0))
+
+    return re.sub(r"<actuator>.*?</actuator>", section, xml, flags=re.DOTALL)
+
+
+def _repoint_assets(xml: str, spec: mujoco.MjSpec, source: Path, output: Path) -> str:
+    """Point relative asset folders (meshdir, texturedir) at the same files from ``output``'s folder."""
+    here, there = source.resolve().parent, output.resolve().parent
+    files = [
+        a.file for group in (spec.meshes, spec.textures, spec.hfields, spec.skins) for a in group if a.file
+    ]
+    if here == there or not files:
+        return xml
+    for attribute in ("meshdir", "texturedir"):
+        folder = str(getattr(spec, attribute) or "")
+        if os.path.isabs(folder):
+            continue
+        value = os.path.relpath(here / folder, there)
+        pattern = rf'(<compiler\b[^>]*?)\s{attribute}="[^"]*"'
+        xml = re.sub(pattern, r"\1", xml, count=1)
+        if "<compiler" in xml:
+            xml = xml.replace("<compiler", f'<compiler {attribute}="{value}"', 1)
+        else:
+            xml = re.sub(r"(<mujoco\b[^>]*>)", rf'\1\n  <compiler {attribute}="{value}"/>', xml, count=1)
+    return xml
+
+
+def write_mjcf(
+    spec: mujoco.MjSpec,
+    output: str | os.PathLike[str],
+    *,
+    source: str | os.PathLike[str] | None = None,
+    force: bool = False,
+) -> mujoco.MjModel:
+    """Write ``spec`` as MJCF to ``output`` atomically, after compiling it from there.
+
+    Unlike ``spec.to_xml()`` alone, the drives' ``dynprm`` keep every digit (MuJoCo's writer keeps
+    6), and the file is known to load before it replaces anything.
+
+    Args:
+        spec: The robot (with its drives).
+        output: The ``.xml`` file to write.
+        source: The MJCF file ``spec`` was read from: relative asset folders (meshdir, texturedir)
+            are re-pointed to reach the same files from ``output``'s folder. None: no re-pointing.
+        force: Replace a read-only output.
+
+    Returns:
+        The model compiled from the written file.
+
+    Raises:
+        InputError: the result does not compile (nothing is written), or the file cannot be written.
+    """
+    import mujoco
+
+    from drive_envelope._src.io.atomic import atomic_path
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            xml = spec.to_xml()
+    except ValueError as exc:
+        where = os.fspath(source if source is not None else output)
+        raise InputError(f"{where}: MuJoCo cannot write the result: {' '.join(str(exc).split())}") from None
+    xml = _exact_dynprm(xml, spec)
+    if source is not None:
+        xml = _repoint_assets(xml, spec, Path(source), Path(output))
+    with atomic_path(output, force=force) as tmp:
+        tmp.write_text(xml, encoding="utf-8")
+        try:
+            with mujoco_warnings():
+                model = mujoco.MjModel.from_xml_path(str(tmp))
+        except ValueError as exc:
+            raise InputError(
+                f"{os.fspath(output)}: the result does not load in MuJoCo, nothing written: "
+                f"{' '.join(str(exc).split())}"
+            ) from None
+    return model

@@ -1,0 +1,313 @@
+"""A drive's numbers in the ``MjModel``: where they live, how to read and change them between steps.
+
+Each drive keeps its six numbers in ``model.actuator_dynprm`` of its effort actuator (the first of
+its joint's actuators in its plugin instance), in SI, and the plugin reads them at every step::
+
+    dynprm[0]  max_effort                     [N*m or N]                 -1: no limit
+    dynprm[1]  max_actuator_velocity          [rad/s or m/s]             -1: no limit
+    dynprm[2]  velocity_dependent_resistance  [N*m*s/rad or N*s/m]
+    dynprm[3]  speed_effort_gradient          [(rad/s)/(N*m) or (m/s)/N]
+    dynprm[4]  stiffness                      [N*m/rad or N/m]; [1/s^2] for an acceleration drive
+    dynprm[5]  damping                        [N*m*s/rad or N*s/m]; [1/s] for an acceleration drive
+    dynprm[6:10] reserved, 0
+
+Every number is in ``[0, 1e12]`` (:data:`PARAM_BOUND`); ``-1`` (:data:`NO_LIMIT`) stands for an
+infinite ``max_effort`` or ``max_actuator_velocity`` because MuJoCo's MJCF writer cannot write
+``inf``. So :func:`set_envelope` on a model takes effect at the next ``mj_step`` of every ``MjData``
+of that model, and ``mujoco.rollout`` over several models uses each model's own numbers: this is
+how to randomize the envelope (``examples/mujoco/domain_randomization.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from drive_envelope._src.envelope.drive import DriveType
+from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.params.table import si_unit
+
+if TYPE_CHECKING:
+    import mujoco
+
+__all__ = [
+    "DYNPRM_SLOTS",
+    "NO_LIMIT",
+    "PARAM_BOUND",
+    "MjDriveInfo",
+    "drive_dynprm",
+    "get_envelope",
+    "get_gains",
+    "model_drives",
+    "set_envelope",
+    "set_gains",
+]
+
+DYNPRM_SLOTS = (
+    "max_effort",
+    "max_actuator_velocity",
+    "velocity_dependent_resistance",
+    "speed_effort_gradient",
+    "stiffness",
+    "damping",
+)
+"""What ``actuator_dynprm[i, k]`` of a drive's effort actuator holds, for k = 0..5."""
+PARAM_BOUND = 1e12
+"""Largest finite number the plugin accepts in a slot [SI]; larger ones overflow the step."""
+NO_LIMIT = -1.0
+"""Slot value for an infinite ``max_effort`` or ``max_actuator_velocity`` (no limit)."""
+INPUTS = ("pos", "vel", "ff")
+NDYN = 10  # mujoco.mjNDYN, fixed by MuJoCo's model layout
+
+# the plugin's declared attributes, in order: how they sit in model.plugin_attr
+_ATTRIBUTES = ("drive_type", "input")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class MjDriveInfo:
+    """One drive of a compiled model, as the plugin sees it (:func:`model_drives`)."""
+
+    name: str
+    """Name of the effort actuator (or ``#id``)."""
+    actuator: int
+    """Id of the effort actuator, whose ``actuator_dynprm`` holds the numbers."""
+    joint: str
+    """The hinge or slide joint it drives."""
+    instance: int
+    """Plugin instance id."""
+    inputs: tuple[str, ...]
+    """Control inputs, a subset of ``("pos", "vel", "ff")`` in canonical order."""
+    actuators: tuple[int, ...]
+    """Actuator ids of the inputs, in the order of :attr:`inputs`."""
+    drive_type: DriveType
+    """``"force"`` or ``"acceleration"``."""
+    envelope: PerformanceEnvelope | None
+    """The envelope (SI), or None when ``max_effort`` is unlimited (-1) or a number is invalid."""
+    stiffness: float
+    """Drive stiffness [N*m/rad or N/m] (force drive) or [1/s^2] (acceleration drive)."""
+    damping: float
+    """Drive damping [N*m*s/rad or N*s/m] (force drive) or [1/s] (acceleration drive)."""
+    dynprm: tuple[float, ...]
+    """The six raw slot values (``-1``: no limit)."""
+
+
+def _checked(value: float, label: str, unit: str, where: str, *, unlimited: bool) -> float:
+    """``value`` as a slot number: in ``[0, 1e12]``, or ``inf`` -> ``-1`` where ``unlimited``."""
+    number = float(value)
+    if unlimited and math.isinf(number) and number > 0:
+        return NO_LIMIT
+    if not (0.0 <= number <= PARAM_BOUND):
+        allowed = " or inf" if unlimited else ""
+        raise InputError(f"{where}: {label} = {value!r}: expected a number in [0, 1e12]{allowed} [{unit}]")
+    return number
+
+
+def drive_dynprm(
+    envelope: PerformanceEnvelope, *, stiffness: float, damping: float, where: str = "drive"
+) -> list[float]:
+    """The ten ``dynprm`` values of a drive's effort actuator (layout in this module's docstring).
+
+    Args:
+        envelope: The envelope (SI); an infinite ``max_actuator_velocity`` becomes ``-1``.
+        stiffness: Drive stiffness, SI [N*m/rad or N/m] (force) or [1/s^2] (acceleration).
+        damping: Drive damping, SI [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration).
+        where: Prefix of error messages (the call and the argument).
+
+    Raises:
+        InputError: a number outside ``[0, 1e12]``, naming it and its unit.
+    """
+    joint = envelope.joint
+    values = [
+        _checked(getattr(envelope, name), name, si_unit(name, joint), where, unlimited=index < 2)
+        for index, name in enumerate(DYNPRM_SLOTS[:4])
+    ]
+    gain_units = ("N*m/rad", "N*m*s/rad") if joint == "revolute" else ("N/m", "N*s/m")
+    values.append(_checked(stiffness, "stiffness", gain_units[0], where, unlimited=False))
+    values.append(_checked(damping, "damping", gain_units[1], where, unlimited=False))
+    return values + [0.0] * (NDYN - len(values))
+
+
+def _instance_config(model: mujoco.MjModel, instance: int) -> tuple[DriveType, tuple[str, ...]]:
+    """(drive type, inputs) of a plugin instance, read from ``model.plugin_attr``."""
+    start = int(model.plugin_attradr[instance])
+    raw = bytes(int(c) & 0xFF for c in model.plugin_attr[start:])
+    fields = [f.decode() for f in raw.split(b"\0")[: len(_ATTRIBUTES)]]
+    drive_type: DriveType = "acceleration" if fields[0] == "acceleration" else "force"
+    words = set(fields[1].replace(",", " ").split()) if fields[1].strip() else {"pos"}
+    return drive_type, tuple(name for name in INPUTS if name in words)
+
+
+def _name(model: mujoco.MjModel, kind: int, index: int) -> str:
+    import mujoco
+
+    return mujoco.mj_id2name(model, kind, index) or f"#{index}"
+
+
+def model_drives(model: mujoco.MjModel) -> tuple[MjDriveInfo, ...]:
+    """Every drive of ``drive_envelope.envelope`` in a compiled model, in actuator order.
+
+    The grouping is the plugin's: an instance's actuators are grouped by joint in order of
+    appearance; the first of each joint carries the effort and the numbers.
+    """
+    from drive_envelope._src.adapters.mujoco.loader import plugin_slot
+
+    slot = plugin_slot()
+    drives = []
+    for instance in range(model.nplugin):
+        if int(model.plugin[instance]) != slot:
+            continue
+        drive_type, inputs = _instance_config(model, instance)
+        groups: dict[int, list[int]] = {}
+        for i in range(model.nu):
+            if int(model.actuator_plugin[i]) == instance:
+                groups.setdefault(int(model.actuator_trnid[i, 0]), []).append(i)
+        for joint, actuators in groups.items():
+            drives.append(_info(model, instance, joint, actuators, drive_type, inputs))
+    drives.sort(key=lambda info: info.actuator)
+    return tuple(drives)
+
+
+def _info(
+    model: mujoco.MjModel,
+    instance: int,
+    joint: int,
+    actuators: Sequence[int],
+    drive_type: DriveType,
+    inputs: tuple[str, ...],
+) -> MjDriveInfo:
+    import mujoco
+
+    first = actuators[0]
+    raw = tuple(float(v) for v in model.actuator_dynprm[first, :6])
+    kind: JointType = (
+        "prismatic" if int(model.jnt_type[joint]) == int(mujoco.mjtJoint.mjJNT_SLIDE) else "revolute"
+    )
+    try:
+        envelope: PerformanceEnvelope | None = PerformanceEnvelope(
+            max_effort=raw[0],
+            max_actuator_velocity=math.inf if raw[1] == NO_LIMIT else raw[1],
+            velocity_dependent_resistance=raw[2],
+            speed_effort_gradient=raw[3],
+            joint=kind,
+            name=_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, first),
+        )
+    except InputError:
+        envelope = None  # unlimited max_effort (-1) or a bad number: the plugin says which
+    return MjDriveInfo(
+        name=_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, first),
+        actuator=first,
+        joint=_name(model, mujoco.mjtObj.mjOBJ_JOINT, joint),
+        instance=instance,
+        inputs=inputs,
+        actuators=tuple(actuators),
+        drive_type=drive_type,
+        envelope=envelope,
+        stiffness=raw[4],
+        damping=raw[5],
+        dynprm=raw,
+    )
+
+
+def _find(model: mujoco.MjModel, actuator: int | str, where: str) -> MjDriveInfo:
+    """The drive that actuator ``actuator`` (name or id, any of the drive's actuators) belongs to."""
+    import mujoco
+
+    if isinstance(actuator, str):
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
+        if index < 0:
+            raise InputError(f"{where}: argument 'actuator': the model has no actuator named {actuator!r}")
+    elif isinstance(actuator, int) and not isinstance(actuator, bool) and 0 <= actuator < model.nu:
+        index = actuator
+    else:
+        raise InputError(
+            f"{where}: argument 'actuator': expected an actuator name or an id in [0, {model.nu}), "
+            f"got {actuator!r}"
+        )
+    for info in model_drives(model):
+        if index in info.actuators:
+            return info
+    name = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, index)
+    raise InputError(f"{where}: actuator {name!r} is not a drive of the drive_envelope.envelope plugin")
+
+
+def set_envelope(model: mujoco.MjModel, actuator: int | str, envelope: PerformanceEnvelope | str) -> None:
+    """Give a drive a new envelope; it takes effect at the next ``mj_step`` of every ``MjData``.
+
+    Args:
+        model: The compiled model (its ``actuator_dynprm`` is written).
+        actuator: Name or id of any of the drive's actuators.
+        envelope: A :class:`PerformanceEnvelope`, or an envelope file, datasheet file or catalog name.
+
+    Raises:
+        InputError: no such drive, an envelope for the other joint type, or a number above 1e12.
+    """
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+
+    where = f"set_envelope(actuator={actuator!r})"
+    info = _find(model, actuator, where)
+    env = resolve_envelope(envelope, where=f"{where}: argument 'envelope'")
+    kind = _joint_kind(model, info)
+    if env.joint != kind:
+        raise InputError(f"{where}: the envelope is for a {env.joint} joint but {info.joint!r} is {kind}")
+    values = drive_dynprm(env, stiffness=info.stiffness, damping=info.damping, where=where)
+    model.actuator_dynprm[info.actuator, :4] = values[:4]
+
+
+def set_gains(
+    model: mujoco.MjModel,
+    actuator: int | str,
+    *,
+    stiffness: float | None = None,
+    damping: float | None = None,
+) -> None:
+    """Change a drive's gains; None keeps a gain. Takes effect at the next ``mj_step``.
+
+    Args:
+        model: The compiled model.
+        actuator: Name or id of any of the drive's actuators.
+        stiffness: Drive stiffness, SI [N*m/rad or N/m] (force) or [1/s^2] (acceleration).
+        damping: Drive damping, SI [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration).
+
+    Raises:
+        InputError: no such drive, or a gain outside ``[0, 1e12]``.
+    """
+    where = f"set_gains(actuator={actuator!r})"
+    info = _find(model, actuator, where)
+    units = ("N*m/rad", "N*m*s/rad") if _joint_kind(model, info) == "revolute" else ("N/m", "N*s/m")
+    if stiffness is not None:
+        model.actuator_dynprm[info.actuator, 4] = _checked(
+            stiffness, "stiffness", units[0], where, unlimited=False
+        )
+    if damping is not None:
+        model.actuator_dynprm[info.actuator, 5] = _checked(
+            damping, "damping", units[1], where, unlimited=False
+        )
+
+
+def get_envelope(model: mujoco.MjModel, actuator: int | str) -> PerformanceEnvelope:
+    """The envelope a drive has in ``model`` now (SI).
+
+    Raises:
+        InputError: no such drive, or its numbers are not an envelope (unlimited or invalid).
+    """
+    where = f"get_envelope(actuator={actuator!r})"
+    info = _find(model, actuator, where)
+    if info.envelope is None:
+        raise InputError(f"{where}: drive {info.name!r} has no valid envelope: dynprm = {list(info.dynprm)}")
+    return info.envelope
+
+
+def get_gains(model: mujoco.MjModel, actuator: int | str) -> tuple[float, float]:
+    """``(stiffness, damping)`` of a drive in ``model`` now (SI, see :func:`set_gains`)."""
+    info = _find(model, actuator, f"get_gains(actuator={actuator!r})")
+    return info.stiffness, info.damping
+
+
+def _joint_kind(model: mujoco.MjModel, info: MjDriveInfo) -> JointType:
+    import mujoco
+
+    joint = int(model.actuator_trnid[info.actuator, 0])
+    return "prismatic" if int(model.jnt_type[joint]) == int(mujoco.mjtJoint.mjJNT_SLIDE) else "revolute"

@@ -1,0 +1,233 @@
+"""``drive-envelope mujoco apply|show``: equip MJCF robots with envelope drives and list them."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from drive_envelope._src.cli.common import add_format_argument, add_output_argument
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``mujoco`` command group."""
+    parser = subparsers.add_parser(
+        "mujoco", help="equip MJCF robots with drive_envelope.envelope drives and list them"
+    )
+    actions = parser.add_subparsers(dest="mujoco_command", metavar="ACTION")
+
+    apply = actions.add_parser(
+        "apply",
+        help="give joints envelope drives (one joint, or the whole robot from a map file)",
+        description="Replace each chosen joint's actuators by a drive_envelope.envelope drive (the actuator "
+        "keeps its name and control slot; a position or general PD actuator keeps its kp and kv) and write a "
+        "new MJCF that loads in MuJoCo with the plugin. The result is compiled before it is written; on any "
+        "error nothing is written.",
+    )
+    apply.add_argument("model", metavar="ROBOT.xml", help="MJCF file of the robot (or scene)")
+    target = apply.add_mutually_exclusive_group(required=True)
+    target.add_argument("--joint", metavar="NAME", help="name of one hinge or slide joint")
+    target.add_argument(
+        "--map",
+        metavar="MAP",
+        help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet (as for usd apply), or the "
+        "name of a shipped robot map (drive-envelope catalog --maps)",
+    )
+    source = apply.add_mutually_exclusive_group()
+    source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")
+    source.add_argument("--envelope", metavar="FILE", help="envelope file (with --joint)")
+    apply.add_argument(
+        "--stiffness",
+        metavar="K",
+        help="drive stiffness for every joint, SI or with units ('60 N*m/rad'); default: the replaced "
+        "actuator's kp",
+    )
+    apply.add_argument(
+        "--damping",
+        metavar="C",
+        help="drive damping for every joint, SI or with units; default: the replaced actuator's kv",
+    )
+    add_output_argument(apply, "the new MJCF file", metavar="OUT.xml")
+    apply.add_argument("--force", action="store_true", help="replace a read-only output file")
+    apply.set_defaults(func=_apply)
+
+    show = actions.add_parser("show", help="list the model's envelope drives (and joints without one)")
+    show.add_argument("model", metavar="ROBOT.xml", help="MJCF file to read")
+    add_format_argument(show, ("text", "json"), "the drives as a table or as one JSON object (SI)")
+    show.set_defaults(func=_show)
+    parser.set_defaults(func=lambda args: _usage(parser))
+
+
+def _usage(parser: argparse.ArgumentParser) -> int:
+    parser.print_help()
+    return 2
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    import os
+    from pathlib import Path
+
+    from drive_envelope._src.cli.common import checked_output
+    from drive_envelope._src.errors import InputError
+
+    if args.joint is not None and args.datasheet is None and args.envelope is None:
+        raise InputError("mujoco apply --joint: needs --datasheet FILE or --envelope FILE")
+    if args.map is not None and (args.datasheet is not None or args.envelope is not None):
+        raise InputError("mujoco apply --map: the map file names the envelopes; drop --datasheet/--envelope")
+    if args.output is None:
+        raise InputError(
+            f"mujoco apply: say where the result goes: -o {Path(args.model).stem}_envelope.xml (MuJoCo's "
+            "writer drops comments and includes, so ROBOT.xml itself is never rewritten)"
+        )
+    output = checked_output(args.output) or ""
+    if Path(output).suffix.lower() != ".xml":
+        raise InputError(f"--output {output!r}: expected an .xml file name")
+    if os.path.exists(output) and os.path.exists(args.model) and os.path.samefile(output, args.model):
+        raise InputError(f"--output {output!r} is ROBOT.xml itself: write a new file")
+
+
+def _map_file(name: str) -> str:
+    """A map file, or the file of the shipped robot map ``name``."""
+    from pathlib import Path
+
+    if Path(name).is_file() or Path(name).suffix or "/" in name:
+        return name
+    from drive_envelope._src.datasheet.maps import robot_map_path
+
+    return str(robot_map_path(name))
+
+
+def _assignments(args: argparse.Namespace, spec: Any) -> list[Any]:
+    from drive_envelope._src.adapters.mujoco.mjcf import Assignment, driven_joints
+    from drive_envelope._src.adapters.usd.joint_map import match_joints, read_map, resolve_envelopes
+    from drive_envelope._src.cli.common import warn
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+
+    if args.map is None:
+        flag, name = (
+            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
+        )
+        return [Assignment(joint=args.joint, envelope=resolve_envelope(name, where=flag), where="--joint")]
+    joint_map = read_map(_map_file(args.map))
+    match = match_joints(joint_map, driven_joints(spec))
+    for message in match.warnings:
+        warn(message)
+    items = []
+    for item in resolve_envelopes(match):
+        if item.entry.instance is not None:
+            warn(f"{item.entry.where}: key 'instance' is a USD drive instance; MuJoCo ignores it")
+        if item.envelope is not None:
+            items.append(Assignment(joint=item.joint, envelope=item.envelope, where=item.entry.where))
+    return items
+
+
+def _apply(args: argparse.Namespace) -> int:
+    import warnings
+
+    from drive_envelope._src.adapters.mujoco.loader import load_plugin
+    from drive_envelope._src.adapters.mujoco.mjcf import apply_drives, load_spec, write_mjcf
+    from drive_envelope._src.adapters.mujoco.params import model_drives
+    from drive_envelope._src.cli.common import status, warn
+
+    _check_arguments(args)
+    load_plugin()
+    spec = load_spec(args.model)
+    assignments = _assignments(args, spec)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        done = apply_drives(spec, assignments, stiffness=args.stiffness, damping=args.damping)
+        model = write_mjcf(spec, args.output, source=args.model, force=args.force)
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        warn(message)
+    for item in done:
+        replaced = f"replaces {item.replaced}" if item.replaced else "new actuator"
+        print(
+            f"{item.joint}: drive {item.drive!r} ({replaced}; inputs {' '.join(item.inputs)}; gains "
+            f"{item.gains_from}): {_summary(item.envelope, item.stiffness, item.damping)}"
+        )
+    status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(model_drives(model))} drives)")
+    return 0
+
+
+def _summary(envelope: Any, stiffness: float, damping: float) -> str:
+    from drive_envelope._src.format import format_value
+    from drive_envelope._src.params.table import si_unit
+
+    parts = [
+        f"{field}={format_value(getattr(envelope, field), si_unit(field, envelope.joint))}"
+        for field in (
+            "max_effort",
+            "max_actuator_velocity",
+            "velocity_dependent_resistance",
+            "speed_effort_gradient",
+        )
+    ]
+    gains = ("N*m/rad", "N*m*s/rad") if envelope.joint == "revolute" else ("N/m", "N*s/m")
+    parts += [f"stiffness={format_value(stiffness, gains[0])}", f"damping={format_value(damping, gains[1])}"]
+    return ", ".join(parts)
+
+
+def _show(args: argparse.Namespace) -> int:
+    import json
+    import math
+    import warnings
+
+    from drive_envelope._src.adapters.mujoco.mjcf import other_actuators, read_model, uses_plugin
+    from drive_envelope._src.adapters.mujoco.params import model_drives
+    from drive_envelope._src.cli.common import warn
+    from drive_envelope._src.format import format_table, format_value
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = read_model(args.model)
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        warn(message)
+    drives = model_drives(model) if uses_plugin(model) else ()
+    others = other_actuators(model, drives)
+    if args.format == "json":
+
+        def number(value: float) -> float | str:
+            return value if math.isfinite(value) else repr(value)
+
+        data = {
+            "file": args.model,
+            "drives": [
+                {
+                    "actuator": d.name,
+                    "joint": d.joint,
+                    "inputs": list(d.inputs),
+                    "drive_type": d.drive_type,
+                    "dynprm": [number(v) for v in d.dynprm],
+                    "envelope": None
+                    if d.envelope is None
+                    else {
+                        k: number(v) if isinstance(v, float) else v for k, v in d.envelope.to_dict().items()
+                    },
+                    "stiffness": d.stiffness,
+                    "damping": d.damping,
+                }
+                for d in drives
+            ],
+            "other_actuators": [{"joint": j, "actuator": a, "kind": k} for j, a, k in others],
+        }
+        print(json.dumps(data, indent=2))
+        return 0
+    print(f"{args.model}: {len(drives)} drive_envelope.envelope drive(s); values in SI")
+    if drives:
+        rows = []
+        for d in drives:
+            limit = "no limit" if d.dynprm[0] == -1 else format_value(d.dynprm[0])
+            speed = "inf" if d.dynprm[1] == -1 else format_value(d.dynprm[1])
+            rows.append(
+                [d.name, d.joint, " ".join(d.inputs), limit, speed, format_value(d.dynprm[2]),
+                 format_value(d.dynprm[3]), format_value(d.stiffness), format_value(d.damping)]
+            )  # fmt: skip
+        header = ["actuator", "joint", "inputs", "max_effort", "max_actuator_velocity",
+                  "velocity_dep_resistance", "speed_effort_gradient", "stiffness", "damping"]  # fmt: skip
+        print(format_table(header, rows))
+        print(
+            "units: revolute N*m, rad/s, N*m*s/rad, (rad/s)/(N*m), N*m/rad, N*m*s/rad; prismatic N, m/s, ..."
+        )
+    if others:
+        print("joints with other actuators (their force bypasses any envelope):")
+        print(format_table(["joint", "actuator", "kind"], [list(o) for o in others]))
+    return 0

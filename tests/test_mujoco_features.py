@@ -1,0 +1,294 @@
+"""MuJoCo's own actuator features with the plugin, and the drives' numbers living in the MjModel.
+
+Twin tests (MuJoCo's pid_test style): a plugin drive beside a native ``position`` actuator with the
+same delay react at the same step; disabled groups silence both alike. The numbers are read from
+``actuator_dynprm`` at every step, so changing the model changes every MjData at its next step, and
+``mujoco.rollout`` over several models uses each model's own envelope.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from drive_envelope import InputError, PerformanceEnvelope
+
+pytestmark = pytest.mark.mujoco
+
+EXT = '<extension><plugin plugin="drive_envelope.envelope"/></extension>'
+TWIN = (
+    '<mujoco><option timestep="0.002" gravity="0 0 0"/>' + EXT + "<worldbody>"
+    '<body><joint name="a" axis="0 0 1"/><inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/></body>'
+    '<body pos="1 0 0"><joint name="b" axis="0 0 1"/>'
+    '<inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/></body></worldbody>'
+    "<actuator>{actuators}</actuator></mujoco>"
+)
+ONE = (
+    '<mujoco><option timestep="0.01" gravity="0 0 0"/>'
+    + EXT
+    + '<worldbody><body><joint name="j" axis="0 0 1"/>'
+    '<inertial pos="0 0 0" mass="1" diaginertia="0.5 0.5 0.5"/></body></worldbody>'
+    '<actuator><plugin name="drive" joint="j" plugin="drive_envelope.envelope" dynprm="{dynprm}" {extra}/>'
+    "</actuator></mujoco>"
+)
+
+
+@pytest.fixture(scope="module")
+def mujoco() -> Any:
+    module = pytest.importorskip("mujoco")
+    from drive_envelope._src.adapters.mujoco import build, loader
+
+    try:
+        loader.load_plugin()
+    except build.PluginError:
+        build.build_plugin(quiet=True)  # `make setup` normally built it
+        loader.load_plugin()
+    return module
+
+
+@pytest.fixture
+def warnings_seen(mujoco: Any) -> Iterator[list[str]]:
+    """Collect MuJoCo's warnings (mju_warning) instead of printing them."""
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    yield seen
+    mujoco.set_mju_user_warning(previous)
+
+
+def _first_step_with_force(mujoco: Any, model: Any, steps: int = 40) -> list[int]:
+    data = mujoco.MjData(model)
+    first = [-1] * model.nu
+    for k in range(steps):
+        data.ctrl[:] = 1.0
+        mujoco.mj_step(model, data)
+        for i in range(model.nu):
+            if first[i] < 0 and data.actuator_force[i] != 0.0:
+                first[i] = k
+    return first
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.006, 0.02])
+def test_delay_reads_the_delayed_control_as_a_native_actuator_does(mujoco: Any, delay: float) -> None:
+    """React to a control step at the same step as a native position actuator with the same delay."""
+    attrs = f'delay="{delay}" nsample="20"' if delay else ""
+    actuators = (
+        f'<plugin name="p" joint="a" plugin="drive_envelope.envelope" dynprm="-1 -1 0 0 10 0" {attrs}/>'
+        f'<position name="n" joint="b" kp="10" {attrs}/>'
+    )
+    model = mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+    first = _first_step_with_force(mujoco, model)
+    assert first[0] == first[1] == round(delay / 0.002)
+
+
+def test_disabled_actuator_group_silences_the_drive_like_a_native_one(mujoco: Any) -> None:
+    """Give zero force while the drive's group is disabled, and force again once it is enabled."""
+    actuators = (
+        '<plugin name="p" joint="a" plugin="drive_envelope.envelope" dynprm="5 -1 0 0 10 1" group="3"/>'
+        '<position name="n" joint="b" kp="10" group="3"/>'
+    )
+    model = mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+    data = mujoco.MjData(model)
+    data.ctrl[:] = 1.0
+    model.opt.disableactuator = 1 << 3
+    mujoco.mj_step(model, data)
+    np.testing.assert_array_equal(data.actuator_force, [0.0, 0.0])
+    assert data.qvel[0] == 0.0
+    model.opt.disableactuator = 0
+    mujoco.mj_step(model, data)
+    assert data.actuator_force[0] > 0.0 and data.actuator_force[1] > 0.0
+
+
+def test_a_disabled_input_actuator_contributes_nothing(mujoco: Any) -> None:
+    """Read a disabled input's control as 0 (its channel is off), the drive still runs."""
+    xml = (
+        '<mujoco><option timestep="0.01" gravity="0 0 0"/>' + EXT
+        + '<worldbody><body><joint name="j" axis="0 0 1"/>'
+        '<inertial pos="0 0 0" mass="1" diaginertia="0.5 0.5 0.5"/></body></worldbody>'
+        '<extension><plugin plugin="drive_envelope.envelope"><instance name="i">'
+        '<config key="input" value="pos ff"/></instance></plugin></extension>'
+        '<actuator><plugin name="pos" joint="j" instance="i" dynprm="-1 -1 0 0 0 0"/>'
+        '<plugin name="ff" joint="j" instance="i" group="2"/></actuator></mujoco>'
+    )  # fmt: skip
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    data.ctrl[:] = [0.0, 2.0]  # zero gains: the effort is the feed-forward alone
+    mujoco.mj_step(model, data)
+    assert data.actuator_force[0] == pytest.approx(2.0)
+    model.opt.disableactuator = 1 << 2
+    mujoco.mj_step(model, data)
+    assert data.actuator_force[0] == 0.0
+
+
+def test_two_drives_on_one_joint_fail_compilation_naming_both(mujoco: Any) -> None:
+    """Refuse a second plugin drive on a joint (20 N*m against a 10 N*m cap before)."""
+    actuators = (
+        '<plugin name="first" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+        '<plugin name="second" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+    )
+    with pytest.raises(ValueError, match="joint 'a' has two drives: actuators 'first' and 'second'"):
+        mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+
+
+def test_another_actuator_on_a_driven_joint_warns_naming_both(mujoco: Any, warnings_seen: list[str]) -> None:
+    """Warn when the model is made that a native actuator's force on a driven joint bypasses the envelope."""
+    # names of their own: the plugin says each distinct warning once per process
+    actuators = (
+        '<plugin name="warned_drive" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+        '<motor name="warned_extra" joint="a"/>'
+    )
+    model = mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+    mujoco.MjData(model)
+    found = [
+        w
+        for w in warnings_seen
+        if "actuator 'warned_extra' also acts on joint 'a', driven by 'warned_drive'" in w
+    ]
+    assert len(found) == 1 and "'ff' input" in found[0]
+
+
+def test_another_actuators_force_enters_the_prediction(mujoco: Any) -> None:
+    """Keep the drive on its envelope at the end-of-step velocity with a native motor pushing the joint."""
+    actuators = (
+        '<plugin name="drive" joint="a" plugin="drive_envelope.envelope" dynprm="2 1 0 0 0 10">'
+        '<config key="input" value="vel"/></plugin><motor name="extra" joint="a"/>'
+    )
+    model = mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+    data = mujoco.MjData(model)
+    data.qvel[0] = 0.99
+    data.ctrl[:] = [5.0, 0.5]  # the drive wants 5 rad/s; the motor adds 0.01 rad/s per step on its own
+    mujoco.mj_step(model, data)
+    env = PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=1.0)
+    # the motor's push was predicted: the drive's effort keeps the end-of-step velocity at 1 rad/s
+    assert data.qvel[0] == pytest.approx(1.0, abs=1e-12)
+    assert env.contains(data.qvel[0], data.actuator_force[0], atol=1e-9)
+
+
+def test_numbers_changed_in_the_model_take_effect_at_the_next_step(mujoco: Any) -> None:
+    """Read actuator_dynprm at every step: two MjData of one model follow it, mj_resetData keeps it."""
+    from drive_envelope.mujoco import get_envelope, set_envelope
+
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
+    datas = [mujoco.MjData(model) for _ in range(2)]
+    for data in datas:
+        data.ctrl[0] = 1.0
+        mujoco.mj_step(model, data)
+        assert data.actuator_force[0] == pytest.approx(8.0)
+    set_envelope(model, "drive", PerformanceEnvelope(max_effort=2.0))
+    for data in datas:
+        mujoco.mj_resetData(model, data)
+        data.ctrl[0] = 1.0
+        mujoco.mj_step(model, data)
+        assert data.actuator_force[0] == pytest.approx(2.0)
+    assert get_envelope(model, "drive").max_effort == 2.0
+    assert model.actuator_dynprm[0, :6].tolist() == [2.0, -1.0, 0.0, 0.0, 1000.0, 0.0]
+
+
+def test_rollout_over_models_uses_each_models_own_envelope(mujoco: Any) -> None:
+    """Give caps 2 and 8 N*m in one mujoco.rollout over two models of one structure."""
+    from mujoco import rollout
+
+    from drive_envelope.mujoco import set_envelope
+
+    models = [
+        mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra="")) for _ in range(2)
+    ]
+    set_envelope(models[0], 0, PerformanceEnvelope(max_effort=2.0))
+    datas = [mujoco.MjData(models[0]) for _ in range(2)]  # made from the first model only
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state0 = np.zeros(mujoco.mj_stateSize(models[0], spec))
+    mujoco.mj_getState(models[0], datas[0], state0, spec)
+    control = np.ones((2, 5, 1))
+    states, _ = rollout.rollout(models, datas, np.tile(state0, (2, 1)), control)
+    velocity = states[:, :, 1 + models[0].nq]
+    # from rest with inertia 0.5: v after one step = cap * dt / 0.5
+    np.testing.assert_allclose(velocity[:, 0], [2.0 * 0.01 / 0.5, 8.0 * 0.01 / 0.5], rtol=1e-12)
+
+
+def test_bad_numbers_set_between_steps_give_no_effort_and_one_warning(
+    mujoco: Any, warnings_seen: list[str]
+) -> None:
+    """Let the drive go (0) on a NaN or negative number set at run time, warning once per MjData."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 1.0
+    model.actuator_dynprm[0, 0] = np.nan
+    for _ in range(3):
+        mujoco.mj_step(model, data)
+        assert data.actuator_force[0] == 0.0
+    assert len([w for w in warnings_seen if "dynprm[0] (max_effort) = nan" in w]) == 1
+    model.actuator_dynprm[0, 0] = 8.0
+    mujoco.mj_step(model, data)
+    assert data.actuator_force[0] == pytest.approx(8.0)
+
+
+def test_a_timestep_made_negative_between_steps_gives_no_effort(
+    mujoco: Any, warnings_seen: list[str]
+) -> None:
+    """Give zero effort (never 1.7e7 N*m) when opt.timestep is set <= 0 after compilation."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="3.3 -1 0 0 1000 0", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 1.0
+    model.opt.timestep = -0.002
+    mujoco.mj_forward(model, data)
+    assert data.actuator_force[0] == 0.0
+    assert any("option 'timestep' = -0.002" in w for w in warnings_seen)
+
+
+def test_set_envelope_and_set_gains_refuse_bad_input(mujoco: Any) -> None:
+    """Raise one-line InputErrors for an unknown actuator, a non-drive, a wrong joint type, a huge number."""
+    from drive_envelope.mujoco import get_gains, set_envelope, set_gains
+
+    actuators = (
+        '<plugin name="drive" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+        '<motor name="motor" joint="b"/>'
+    )
+    model = mujoco.MjModel.from_xml_string(TWIN.format(actuators=actuators))
+    with pytest.raises(InputError, match="the model has no actuator named 'knee'"):
+        set_envelope(model, "knee", PerformanceEnvelope(max_effort=1.0))
+    with pytest.raises(InputError, match="actuator 'motor' is not a drive"):
+        set_envelope(model, "motor", PerformanceEnvelope(max_effort=1.0))
+    with pytest.raises(InputError, match=r"an id in \[0, 2\), got 7"):
+        set_envelope(model, 7, PerformanceEnvelope(max_effort=1.0))
+    with pytest.raises(InputError, match="envelope is for a prismatic joint but 'a' is revolute"):
+        set_envelope(model, "drive", PerformanceEnvelope(max_effort=1.0, joint="prismatic"))
+    with pytest.raises(InputError, match=r"max_effort = 10000000000000.0: expected a number in \[0, 1e12\]"):
+        set_envelope(model, "drive", PerformanceEnvelope(max_effort=1e13))
+    with pytest.raises(InputError, match="stiffness = -1"):
+        set_gains(model, "drive", stiffness=-1)
+    set_gains(model, "drive", damping=3.0)
+    assert get_gains(model, "drive") == (10.0, 3.0)
+
+
+def test_plugin_state_reports_the_solve(mujoco: Any) -> None:
+    """Report the solve's iterations and row solves of the last step in the leader's plugin state."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="1 -1 0 0 1000 0", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 0.0
+    mujoco.mj_step(model, data)
+    assert data.plugin_state.tolist() == [0.0, 0.0]  # inside the envelope: the linear solve is it
+    data.ctrl[0] = 1.0
+    mujoco.mj_step(model, data)
+    # saturated: a Newton step (clamp, two slope probes), then a second clamp that confirms it
+    assert data.plugin_state.tolist() == [2.0, 4.0]
+
+
+def test_domain_randomization_example_gives_each_model_its_own_envelope(mujoco: Any) -> None:
+    """Run the shipped example briefly: each rollout's knee efforts stay within its own max_effort."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples" / "mujoco"))
+    try:
+        import domain_randomization as example
+    finally:
+        sys.path.pop(0)
+    models, drawn = example.randomized_models(3, seed=1)
+    _, effort = example.roll_out(models, seconds=0.4)
+    caps = np.array([env.max_effort for env in drawn])
+    assert len(set(caps)) == 3
+    peaks = np.abs(effort).max(axis=(1, 2))
+    assert (peaks <= caps * (1 + 1e-12)).all() and (peaks > 0.9 * caps).all()  # each saturates at its own cap
