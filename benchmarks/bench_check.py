@@ -6,11 +6,14 @@ velocity, effort) in a temporary directory, then times, interleaved and each in 
 
 * ``read``: ``pyarrow.csv.read_csv`` of the whole file (multi-threaded), the baseline;
 * ``check``: ``drive_envelope.analysis.check_log`` streaming the file in chunks;
-* the same two for a Parquet copy (``pyarrow.parquet.read_table`` vs ``check_log``).
+* the same two for a Parquet copy (``pyarrow.parquet.read_table`` vs ``check_log``);
+* ``check-joints``: ``check_log`` on a long-format copy whose rows cycle through ``--joints``
+  distinct joint names (default 1000, the most a check accepts): memory must stay bounded, about
+  one chunk plus 32 KiB per joint, whatever the number of rows.
 
 Prints the median wall time and peak RSS of each, and the ratio check / read (goal: <= 5). Usage::
 
-    python benchmarks/bench_check.py [--rows 10000000] [--repeats 3]
+    python benchmarks/bench_check.py [--rows 10000000] [--repeats 3] [--joints 1000]
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ _TASKS = {
     "check-csv": _CHECK,
     "read-parquet": ("import pyarrow.parquet as q", "q.read_table({path!r})"),
     "check-parquet": _CHECK,
+    "check-joints": (_CHECK[0], "assert sum(j.samples for j in check_log(env, {path!r}).joints) == {rows}"),
 }
 
 
@@ -70,6 +74,33 @@ def _generate(directory: Path, rows: int) -> tuple[Path, Path]:
     return csv_path, parquet_path
 
 
+def _generate_joints(directory: Path, rows: int, joints: int) -> Path:
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    path = directory / "joints.csv"
+    names = np.array([f"joint_{i}" for i in range(joints)])
+    rng = np.random.default_rng(1)
+    schema = pa.schema([("time", pa.float64()), ("joint", pa.string()), ("velocity", pa.float64()),
+                        ("effort", pa.float64())])  # fmt: skip
+    with pacsv.CSVWriter(path, schema) as out:
+        for start in range(0, rows, 1_000_000):
+            n = min(1_000_000, rows - start)
+            index = start + np.arange(n)
+            table = pa.table(
+                {
+                    "time": (index // joints) * 1e-3,
+                    "joint": pa.array(names[index % joints]),
+                    "velocity": rng.uniform(-25.0, 25.0, n),
+                    "effort": rng.uniform(-11.0, 11.0, n),
+                },
+                schema=schema,
+            )
+            out.write_table(table)
+    return path
+
+
 def _run(task: str, path: Path, rows: int) -> tuple[float, float]:
     setup, statement = (part.format(path=str(path), rows=rows) for part in _TASKS[task])
     script = (
@@ -87,16 +118,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rows", type=int, default=10_000_000)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--joints", type=int, default=1000)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         started = time.perf_counter()
         csv_path, parquet_path = _generate(Path(tmp), args.rows)
+        joints_path = _generate_joints(Path(tmp), args.rows, args.joints)
         size_mib = csv_path.stat().st_size / 2**20
         print(f"generated {args.rows} rows: CSV {size_mib:.0f} MiB in {time.perf_counter() - started:.1f} s")
         results: dict[str, list[tuple[float, float]]] = {task: [] for task in _TASKS}
         for _ in range(args.repeats):  # interleaved, so machine load hits every task alike
             for task in _TASKS:
                 path = parquet_path if task.endswith("parquet") else csv_path
+                path = joints_path if task == "check-joints" else path
                 results[task].append(_run(task, path, args.rows))
     medians = {
         task: (statistics.median(t for t, _ in runs), max(m for _, m in runs))

@@ -173,13 +173,37 @@ def test_reference_test_stand_checks_clean_and_fails_a_tighter_envelope(name: st
     assert other.samples_outside > 0 and other.worst is not None
 
 
-def test_runaway_past_the_speed_limit_is_reported() -> None:
-    """Flag the overspeed scenario, where a load drives the joint past max_actuator_velocity."""
+def test_runaway_past_the_speed_limit_is_reported_as_released() -> None:
+    """Count the overspeed scenario's samples as released: the load drives the joint, the drive lets go."""
     envelope, trajectory = _stand("overspeed_release_tgs")
     check = check_samples(envelope, trajectory.velocity, trajectory.effort, time=trajectory.time)  # type: ignore[attr-defined]
-    assert check.velocity is not None and check.velocity.samples_outside > 0
-    assert check.worst is not None and check.worst.curve == "velocity"
-    assert check.time_outside is not None and check.time_outside > 0.0
+    assert check.samples_released == check.samples == len(trajectory)  # type: ignore[arg-type]
+    assert check.samples_outside == 0 and check.worst is None
+    assert check.velocity is not None and check.velocity.minimum < -0.3 * envelope.max_actuator_velocity
+    assert check.time_released == pytest.approx(float(trajectory.time[-1]))  # type: ignore[attr-defined]
+
+
+#   released golden: T = 10, R = 0.5, V = 5, G = 0.2 -> no-load speed min(5, 10/0.5) = 5 rad/s
+#   row  v      tau     effort margin   velocity margin   verdict
+#   1    6      0       7               -1                released (zero effort, past no-load)
+#   2   -7      1e-7    6.5             -2                released (|tau| <= slack * 10)
+#   3    6      0.5     6.5             -1.1              outside (eq. 2): the drive pushed
+#   4    4.9    0       7.55            0.1               inside
+#   5    5      0       7.5             0                 inside (on the line)
+def test_released_samples_are_counted_apart_from_outside() -> None:
+    """Count zero-effort samples past the no-load speed as released, never as outside."""
+    velocity, effort = [6.0, -7.0, 6.0, 4.9, 5.0], [0.0, 1e-7, 0.5, 0.0, 0.0]
+    check = check_samples(ENV, velocity, effort, time=[0.0, 0.1, 0.3, 0.4, 0.5])
+    assert (check.samples_released, check.samples_outside) == (2, 1)
+    assert check.time_released == pytest.approx(0.1) and check.time_outside == pytest.approx(0.2)
+    assert check.velocity is not None and check.velocity.samples_outside == 1
+    worst = check.worst
+    assert worst is not None and worst.row == 3 and worst.excess == pytest.approx(1.1)
+    assert check.velocity.minimum == pytest.approx(-2.0)  # margins still cover every sample
+    # a resistance-bound no-load speed (10 / 2 = 5 rad/s < V = 8) releases through eq. 1
+    steep = PerformanceEnvelope(max_effort=10.0, max_actuator_velocity=8.0, velocity_dependent_resistance=2.0)
+    other = check_samples(steep, [6.0, 6.0], [0.0, 0.1])
+    assert (other.samples_released, other.samples_outside) == (1, 1)
 
 
 def test_kept_points_are_bounded_and_include_violations() -> None:
@@ -191,3 +215,47 @@ def test_kept_points_are_bounded_and_include_violations() -> None:
     assert points is not None and points.velocity.size <= 1000 and points.outside.sum() == 500
     outside = ~ENV.contains(points.velocity[points.outside], points.effort[points.outside], atol=1e-9)
     assert outside.all()
+
+
+def test_joint_count_is_bounded() -> None:
+    """Refuse a log with more distinct joints than max_joints, naming the row of the first extra one."""
+    table = {"joint": ["a", "b", "a", "c"], "velocity": [0.0] * 4, "effort": [0.0] * 4}
+    assert len(check_log(ENV, table, options=CheckOptions(max_joints=3)).joints) == 3
+    with pytest.raises(InputError, match=r"row 4: joint 'c' is joint number 3; expected at most 2"):
+        check_log(ENV, table, options=CheckOptions(max_joints=2))
+    with pytest.raises(InputError, match="max_joints: expected an integer >= 1"):
+        CheckOptions(max_joints=0)
+
+
+def test_kept_points_share_one_budget_across_many_joints() -> None:
+    """Keep at most about 16 x keep_points samples in all, and at least 500 per joint."""
+    rng = np.random.default_rng(1)
+    joints = 40
+    n = 2000 * joints
+    table = {
+        "joint": np.repeat([f"j{i}" for i in range(joints)], 2000),
+        "velocity": rng.uniform(-6, 6, n),
+        "effort": rng.uniform(-11, 11, n),
+    }
+    report = check_log(ENV, table, options=CheckOptions(keep_points=1000))
+    kept = [j.points.velocity.size for j in report.joints if j.points is not None]
+    assert len(kept) == joints and min(kept) > 0
+    # 16 * 1000 // 40 = 400 < 500: each joint keeps at most 500 regular samples and 500 violations
+    assert max(kept) <= 2 * 500 and sum(kept) <= 2 * max(16 * 1000, 500 * joints)
+    alone = check_log(ENV, {k: v[:2000] for k, v in table.items()}, options=CheckOptions(keep_points=1000))
+    assert alone.joints[0].points is not None and alone.joints[0].points.velocity.size > 1000
+
+
+def test_overflowing_margins_are_outside_and_json_stays_strict() -> None:
+    """Count a margin beyond float range as outside, and write it as "-inf" (strict JSON)."""
+    import json
+
+    huge = PerformanceEnvelope(
+        max_effort=1.0, max_actuator_velocity=1e308, velocity_dependent_resistance=10.0
+    )
+    with np.errstate(all="raise"):  # no floating-point warning escapes the check
+        report = check_log(huge, {"time": [-1e308, 1e308], "velocity": [1e308, 0.0], "effort": [1.0, 0.0]})
+    joint = report.joints[0]
+    assert joint.samples_outside == 1 and joint.effort.minimum == -np.inf
+    text = json.dumps(report.to_dict(), allow_nan=False)
+    assert '"minimum": "-inf"' in text and '"duration": "inf"' in text

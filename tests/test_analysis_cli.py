@@ -175,7 +175,35 @@ def test_check_reads_parquet(tmp_path: Path, envelope_file: Path, capsys: pytest
     pa = pytest.importorskip("pyarrow")
     pq = pytest.importorskip("pyarrow.parquet")
     log = tmp_path / "log.parquet"
-    pq.write_table(pa.table({"time": [0.0, 0.1], "velocity": [0.0, 6.0], "effort": [0.0, 0.0]}), log)
+    pq.write_table(pa.table({"time": [0.0, 0.1], "velocity": [0.0, 6.0], "effort": [0.0, 1.0]}), log)
     assert main(["check", str(envelope_file), str(log), "--json"]) == 1
     velocity = json.loads(capsys.readouterr().out)["joints"][0]["velocity"]
-    assert velocity["worst"]["excess"] == pytest.approx(1.0) and velocity["worst"]["row"] == 2
+    assert velocity["worst"]["excess"] == pytest.approx(1.2) and velocity["worst"]["row"] == 2
+
+
+def test_check_reports_released_samples_in_text_and_json(
+    tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Count zero-effort samples past the no-load speed as released, apart from outside, in both formats."""
+    # ENV: no-load speed 5 rad/s; rows 2-3 coast at 6 and 7 rad/s with zero effort, row 4 pushes at 6
+    log = write_log(
+        tmp_path / "log.csv", [(0.0, 0.0, 0.0), (0.1, 6.0, 0.0), (0.2, 7.0, 0.0), (0.3, 6.0, 0.5)]
+    )
+    assert main(["check", str(envelope_file), str(log), "--json"]) == 1
+    joint = json.loads(capsys.readouterr().out)["joints"][0]
+    assert (joint["samples_released"], joint["samples_outside"]) == (2, 1)
+    assert joint["time_released"] == pytest.approx(0.2)
+    assert main(["check", str(envelope_file), str(log)]) == 1
+    out = capsys.readouterr().out
+    assert "1 outside (25 %), 2 released -> FAIL" in out
+    assert "released: 2 samples (0.2 s) above the speed line with zero effort" in out
+
+
+def test_check_accepts_a_header_with_spaces(
+    tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Check 'time, velocity, effort' as written by hand or by 'a, b' formatting."""
+    log = tmp_path / "log.csv"
+    log.write_text("time, velocity, effort\n0.0, 1.0, 2.0\n0.1, 2.0, 3.0\n", encoding="utf-8")
+    assert main(["check", str(envelope_file), str(log)]) == 0
+    assert "2 samples over 0.1 s, 0 outside" in capsys.readouterr().out

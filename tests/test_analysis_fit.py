@@ -145,6 +145,31 @@ def test_fit_options_are_validated() -> None:
         FitOptions(fixed={"max_torque": 1.0})
     with pytest.raises(InputError, match="at least 3 samples"):
         fit_samples([1.0], [1.0])
+    with pytest.raises(InputError, match="seed: expected an integer >= 0, got -1"):
+        FitOptions(seed=-1)
+    with pytest.raises(InputError, match=r"bootstrap: expected an integer in 0\.\.10000"):
+        FitOptions(bootstrap=10**8)
+    with pytest.raises(InputError, match="fix: max_effort must be a number"):
+        FitOptions(fixed={"max_effort": "12"})  # type: ignore[dict-item]
+
+
+def test_samples_beyond_the_fit_range_are_refused_not_mis_fitted() -> None:
+    """Refuse samples above 1e100 (the fit's sums would overflow into a wrong slope) and NaN."""
+    speed = np.linspace(0.0, 30.0, 50)
+    with pytest.raises(InputError, match=r"\|velocity\| up to 3e\+307 \[SI\]; expected at most 1e\+100"):
+        fit_samples(speed * 1e306, (40.0 - 0.4 * speed) * 1e306)
+    scaled = fit_samples(speed * 1e90, (40.0 - 0.4 * speed) * 1e90, FitOptions(bootstrap=0))
+    assert scaled.estimate("velocity_dependent_resistance").value == pytest.approx(0.4, rel=1e-6)
+    with pytest.raises(InputError, match=r"effort sample 2 is nan"):
+        fit_samples([1.0, 2.0, 3.0], [1.0, 2.0, float("nan")])
+
+
+def test_fit_log_errors_name_the_log_and_the_joint(tmp_path: Path) -> None:
+    """Prefix errors about the samples with the log (and the selected joint)."""
+    log = tmp_path / "sweep.csv"
+    log.write_text("joint,velocity,effort\na,1,2\na,2,1\nb,0,3\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"sweep\.csv: joint 'b': 1 sample\(s\); expected at least 3"):
+        fit_log(log, select="b")
 
 
 def test_fits_a_digitized_datasheet_curve_in_vendor_units(tmp_path: Path) -> None:

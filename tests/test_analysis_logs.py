@@ -165,3 +165,97 @@ def test_parquet_with_text_column_is_refused(tmp_path: Path) -> None:
     pq.write_table(pa.table({"velocity": ["fast"], "effort": [1.0]}), path)
     with pytest.raises(InputError, match="column 'velocity' has type string"):
         read_log(path)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_spaces_around_column_names_are_ignored(tmp_path: Path, engine: str) -> None:
+    """Read 'time, velocity, effort' (spaces after the commas) as the plain header."""
+    path = write(tmp_path, "time, velocity , effort\n0, 1.5, 2\n0.1, -3 ,4\n")
+    chunk = read_log(path, engine=engine)  # type: ignore[arg-type]
+    np.testing.assert_array_equal(chunk.velocity, [1.5, -3.0])
+    np.testing.assert_array_equal(chunk.time, [0.0, 0.1])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        (
+            "time,velocity,velocity,effort",
+            "column 'velocity' is ambiguous: the header has 'velocity' (column 2)",
+        ),
+        ("time,Velocity,velocity,effort", "column 'velocity' is ambiguous"),
+        ("time, velocity,velocity ,effort", "column 'velocity' is ambiguous"),
+        ("time,time,velocity,effort", "column 'time' is ambiguous"),
+    ],
+)
+def test_a_column_named_twice_is_refused(tmp_path: Path, engine: str, header: str, message: str) -> None:
+    """Refuse duplicate or case-ambiguous names of a column that is read (never pick the first)."""
+    path = write(tmp_path, header + "\n0,1,100,1\n")
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        read_log(path, engine=engine)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_repeated_column_that_is_not_read_is_harmless(tmp_path: Path, engine: str) -> None:
+    """Read a log whose unused columns repeat a name (bench loggers do that)."""
+    path = write(tmp_path, "time,note,velocity,note,effort\n0,a,1,b,2\n")
+    assert read_log(path, engine=engine).effort.tolist() == [2.0]  # type: ignore[arg-type]
+
+
+def test_one_column_in_two_roles_is_refused(tmp_path: Path) -> None:
+    """Refuse --velocity-column effort; let an explicit role take a default-named column."""
+    path = write(tmp_path, SIMULATE_CSV)
+    with pytest.raises(
+        InputError, match="column 'effort' is named by both --velocity-column and --effort-column"
+    ):
+        read_log(path, LogColumns(velocity="effort"))
+    chunk = read_log(path, LogColumns(velocity="time"))  # 'time' is velocity here, so no time column
+    assert chunk.time is None and chunk.velocity.tolist() == [0.0, 0.01, 0.02]
+    with pytest.raises(InputError, match="named by both --velocity-column and --time-column"):
+        read_log(path, LogColumns(velocity="time", time="time", require_time=True))
+
+
+def test_table_with_a_repeated_name_is_refused() -> None:
+    """Refuse a DataFrame with two 'velocity' columns, as a CSV header."""
+    pd = pytest.importorskip("pandas")
+    frame = pd.DataFrame([[1.0, 2.0, 3.0]], columns=["velocity", "velocity", "effort"])
+    with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
+        read_log(frame)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_truncated_gzip_is_one_line(tmp_path: Path, engine: str) -> None:
+    """Report a .gz cut short as unreadable, naming the file."""
+    data = gzip.compress(("time,velocity,effort\n" + "0.5,1.0,2.0\n" * 20000).encode())
+    path = tmp_path / "log.csv.gz"
+    path.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InputError, match=r"log\.csv\.gz: cannot read") as info:
+        read_log(path, engine=engine)  # type: ignore[arg-type]
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_header_field_over_the_csv_limit_is_one_line(tmp_path: Path, engine: str) -> None:
+    """Refuse a header field over 131072 characters, naming the line; a long line is refused too."""
+    path = write(tmp_path, "time,velocity,effort," + "x" * 140_000 + "\n0,1,2,3\n")
+    with pytest.raises(InputError, match=r"line 1 \(the header\): field larger than field limit"):
+        read_log(path, engine=engine)  # type: ignore[arg-type]
+    path = write(tmp_path, "velocity,effort" + ",x" * 600_000 + "\n1,2\n")
+    with pytest.raises(InputError, match="line 1 is longer than 1048576 characters"):
+        read_log(path, engine=engine)  # type: ignore[arg-type]
+
+
+def test_a_folder_is_not_a_log(tmp_path: Path) -> None:
+    """Say a folder is a folder, not that it is missing."""
+    with pytest.raises(InputError, match="is a folder"):
+        read_log(tmp_path)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_joint_names_are_read_without_outer_spaces(tmp_path: Path, engine: str) -> None:
+    """Give ' hip' and 'hip' one code (the spaces came from 'a, b' formatting)."""
+    path = write(tmp_path, "joint,velocity,effort\nhip,1,2\n hip ,3,4\nknee,5,6\n")
+    chunk = read_log(path, engine=engine)  # type: ignore[arg-type]
+    assert chunk.names == ("hip", "knee") and chunk.joint is not None
+    assert chunk.joint.tolist() == [0, 0, 1]

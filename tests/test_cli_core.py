@@ -117,3 +117,77 @@ def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> Non
     assert fresh.read_text() == "b"
     with pytest.raises(InputError, match="does not exist"):
         atomic_write_text(tmp_path / "missing" / "x.txt", "c")
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["check", "--bogus"], "drive-envelope check: error: the following arguments are required"),
+        (["fit", "x.csv", "--seed", "x"], "argument --seed: expected an integer >= 0, got 'x'"),
+        (["nope"], "drive-envelope: error: argument COMMAND: invalid choice: 'nope'"),
+    ],
+)
+def test_bad_flags_are_one_line_with_exit_2(
+    argv: list[str], needle: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Print a bad flag as one line (no usage dump) pointing at --help, and return 2."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err and "--help)" in err
+
+
+def test_integer_and_fraction_flag_types() -> None:
+    """Read whole numbers (1e8 too) within bounds and fractions in [0, 1]; refuse the rest."""
+    import argparse
+
+    from drive_envelope._src.cli.common import fraction, integer_at_least
+
+    count = integer_at_least(1, 10**9)
+    assert count("12") == 12 and count("1e8") == 10**8 and count("+7") == 7
+    for bad in ("0", "1.5", "x", "inf", "nan", "2e9", "1e400"):
+        with pytest.raises(argparse.ArgumentTypeError, match=r"expected an integer in 1\.\.1000000000"):
+            count(bad)
+    assert integer_at_least(0)("123456789012345678901234567890") == 123456789012345678901234567890
+    assert fraction("0") == 0.0 and fraction("1") == 1.0
+    for bad in ("-0.1", "1.01", "nan", "x"):
+        with pytest.raises(argparse.ArgumentTypeError, match=r"expected a fraction in \[0, 1\]"):
+            fraction(bad)
+
+
+class _Terminal:
+    """A stream that says it is a terminal and records what is written."""
+
+    def __init__(self, tty: bool) -> None:
+        self.tty, self.text = tty, ""
+
+    def isatty(self) -> bool:
+        return self.tty
+
+    def write(self, text: str) -> None:
+        self.text += text
+
+    def flush(self) -> None:
+        pass
+
+
+def test_progress_bar_draws_only_on_a_terminal_and_only_for_long_runs() -> None:
+    """Draw nothing off a terminal or before the delay; on a terminal, one updating line ended by close."""
+    from drive_envelope._src.cli.common import Progress
+
+    piped = _Terminal(tty=False)
+    bar = Progress("simulate", stream=piped, delay=0.0)  # type: ignore[arg-type]
+    bar(5, 10)
+    bar.close()
+    assert piped.text == ""
+    quick = _Terminal(tty=True)
+    bar = Progress("simulate", stream=quick, delay=60.0)  # type: ignore[arg-type]
+    bar(5, 10)
+    bar.close()
+    assert quick.text == ""  # a short run prints nothing
+    tty = _Terminal(tty=True)
+    bar = Progress("simulate", stream=tty, delay=0.0)  # type: ignore[arg-type]
+    bar(5, 10)
+    bar(6, 10)  # within 0.2 s of the last draw: skipped
+    bar.close()
+    assert tty.text.startswith("\rsimulate [###############...............]  50.0 % (5/10")
+    assert tty.text.endswith("\n") and tty.text.count("\r") == 1

@@ -84,3 +84,46 @@ def test_bad_arguments_raise_input_error(kwargs: dict[str, float]) -> None:
     """Non-positive extents and fewer than two samples are refused."""
     with pytest.raises(InputError):
         envelope_curve(ENV, **kwargs)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("scale", [1e-250, 1e-20, 1.0, 1e20, 1e250])
+def test_region_keeps_every_corner_at_any_scale(scale: float) -> None:
+    """Scale effort and speed by the same factor: the polygon scales with them, every vertex kept."""
+    scaled = PerformanceEnvelope(
+        max_effort=10.0 * scale,
+        max_actuator_velocity=6.0 * scale,
+        velocity_dependent_resistance=0.5,
+        speed_effort_gradient=0.2,
+    )
+    np.testing.assert_allclose(envelope_curve(scaled).boundary, ENV.boundary() * scale, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("envelope", "message"),
+    [
+        (PerformanceEnvelope(max_effort=1e308), "effort axis would span"),
+        (PerformanceEnvelope(max_effort=1.0, max_actuator_velocity=1e305), "velocity axis would span"),
+        (PerformanceEnvelope(max_effort=1e-300, max_actuator_velocity=1.0), "too small to draw to scale"),
+    ],
+)
+def test_windows_matplotlib_cannot_draw_are_refused(envelope: PerformanceEnvelope, message: str) -> None:
+    """Refuse a window matplotlib would overflow or silently widen, naming the axis."""
+    with pytest.raises(InputError, match=message):
+        envelope_curve(envelope)
+
+
+def test_boundary_lines_are_clipped_to_the_window() -> None:
+    """End each line at the window; a line entirely outside it (v_max = 1.7e308) has NaN ends."""
+    far = PerformanceEnvelope(
+        max_effort=10.0,
+        max_actuator_velocity=1.7e308,
+        velocity_dependent_resistance=2.0,
+        speed_effort_gradient=1e-9,
+    )
+    curve = envelope_curve(far)  # no-load speed 10 / 2 = 5 rad/s: the window is +-5.75
+    eq1, eq2 = curve.lines
+    np.testing.assert_allclose(eq1.segments[0], [[0.0, 10.0], [5.0, 0.0]])
+    assert np.isnan(eq2.segments).all()
+    partial = envelope_curve(ENV, velocity_extent=5.5, effort_extent=5.0)
+    # eq. 2 runs from (6, 0) to (5, 5) (|v| = 6 - 0.2 |tau|); the window cuts it at v = 5.5
+    np.testing.assert_allclose(partial.lines[1].segments[0], [[5.5, 2.5], [5.0, 5.0]])

@@ -144,3 +144,67 @@ def test_plot_to_missing_folder_exits_2(tmp_path: Path, capsys: pytest.CaptureFi
     """A figure path in a missing folder exits 2 with one line."""
     assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "missing" / "fig.png")]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_names_from_files_are_drawn_literally(tmp_path: Path) -> None:
+    """Draw a name with dollar signs ('$x^$', broken mathtext) as text: the figure is written."""
+    from drive_envelope.plots import OperatingPoints, plot_envelope, save_figure
+
+    named = PerformanceEnvelope(max_effort=1.0, name="$x^$ motor")
+    env_file = tmp_path / "env.toml"
+    env_file.write_text('name = "$x^$ motor"\nmax_effort = 1.0\n', encoding="utf-8")
+    assert main(["plot", str(env_file), "-o", str(tmp_path / "a.png")]) == 0
+    plot = plot_envelope(named)
+    assert plot.figure.get_suptitle() == r"\$x^\$ motor"
+    save_figure(plot, tmp_path / "b.svg")
+    with pytest.raises(InputError, match=r"points 1 label '\$x\^\$': not valid matplotlib mathtext"):
+        plot_envelope(named, points=OperatingPoints(velocity=[0.0], effort=[0.0], label="$x^$"))
+
+
+def test_title_mathtext_is_checked_before_drawing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Accept valid mathtext in --title; refuse '$x^$' in one line before any file is written."""
+    assert main(["plot", str(SCENARIO), "--title", r"$\tau_{max}$ test", "-o", str(tmp_path / "ok.png")]) == 0
+    capsys.readouterr()
+    assert main(["plot", str(SCENARIO), "--title", "$x^$", "-o", str(tmp_path / "bad.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--title '$x^$': not valid matplotlib mathtext" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ok.png"]
+
+
+def test_raster_size_is_bounded() -> None:
+    """Refuse a dpi that would make a PNG wider than 65535 pixels or over 2**27 pixels; suggest one."""
+    from drive_envelope.plots import plot_envelope, save_figure
+
+    plot = plot_envelope(ENV)  # 7 x 6.4 in
+    with pytest.raises(InputError, match=r"--dpi 100000: .* 700000 x 640000 pixels.*\(--dpi 1730 or less\)"):
+        save_figure(plot, "never.png", dpi=100_000)
+    with pytest.raises(InputError, match="--dpi 0: expected a positive integer"):
+        save_figure(plot, "never.png", dpi=0)
+
+
+def test_nan_operating_points_are_refused_not_dropped(tmp_path: Path) -> None:
+    """Refuse NaN points (matplotlib would drop them silently), in the API and in a trajectory file."""
+    from drive_envelope.plots import OperatingPoints
+
+    with pytest.raises(InputError, match=r"operating points 'log': effort\[1\] is nan"):
+        OperatingPoints(velocity=[0.0, 1.0], effort=[0.0, float("nan")], label="log")
+    trajectory = tmp_path / "run.csv"
+    trajectory.write_text("time,position,velocity,effort\n0,0,0,0\n0.1,0,NaN,1\n", encoding="utf-8")
+    assert main(["plot", str(SCENARIO), "-t", str(trajectory), "-o", str(tmp_path / "x.png")]) == 2
+
+
+def test_extreme_envelopes_are_drawn_to_scale_or_refused() -> None:
+    """Draw an envelope of 1e-200 N*m with its whole region; refuse one whose window overflows."""
+    from drive_envelope.plots import plot_envelope
+
+    tiny = PerformanceEnvelope(
+        max_effort=1e-200,
+        max_actuator_velocity=1e-200,
+        velocity_dependent_resistance=0.5,
+        speed_effort_gradient=0.2,
+    )
+    plot = plot_envelope(tiny)
+    assert plot.curve is not None and plot.curve.boundary.shape[0] == 8
+    assert plot.axes[0].get_xlim()[1] == pytest.approx(1.15e-200)
+    with pytest.raises(InputError, match="too large to draw to scale"):
+        plot_envelope(PerformanceEnvelope(max_effort=1e308))

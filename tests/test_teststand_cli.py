@@ -120,3 +120,65 @@ def test_unwritable_output_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture
     out = tmp_path / "missing" / "out.csv"
     assert main(["simulate", str(SATURATION), "-o", str(out), "--set", "simulation.duration=0.05"]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_step_limit_is_checked_before_the_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Refuse more than max_steps steps before any engine starts (or allocates); --max-steps raises it."""
+    scenario = load_scenario(SATURATION, ["simulation.duration=1"])  # 120 steps
+    started = []
+    monkeypatch.setattr(engines, "engine_module", lambda name: started.append(name))
+    with pytest.raises(
+        InputError, match=r"= 120 steps; expected at most 100 \(raise the limit with --max-steps"
+    ):
+        engines.simulate(scenario, max_steps=100)
+    assert started == []
+    assert engines.check_steps(scenario, 120) == 120
+    assert engines.MAX_STEPS == 10**8
+
+
+def test_simulate_refuses_a_run_over_the_limit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Exit 2 with one line naming the file for dt = 1e-9 (1e9 steps), at once, writing nothing."""
+    out = tmp_path / "run.csv"
+    assert main(["simulate", str(SATURATION), "--set", "simulation.dt=1e-9", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"drive-envelope: error: {SATURATION}: ")
+    assert "1e+09 steps; expected at most 100000000" in err
+    assert main(["simulate", str(SATURATION), "--max-steps", "100", "-o", str(out)]) == 2
+    assert main(["simulate", str(SATURATION), "--max-steps", "1e3", "-o", str(out)]) == 0
+    assert list(tmp_path.iterdir()) == [out]
+
+
+def test_engines_get_the_progress_callback(tmp_path: Path) -> None:
+    """Report (done, total) to an engine's progress callback, ending at total."""
+    calls: list[tuple[int, int]] = []
+    scenario = load_scenario(SATURATION, ["simulation.duration=100"])  # 12000 steps
+    engines.simulate(scenario, progress=lambda done, total: calls.append((done, total)))
+    assert calls[-1] == (12000, 12000) and calls[0] == (4096, 12000)
+    assert [done for done, _ in calls] == sorted(done for done, _ in calls)
+
+
+def test_simulate_streams_to_stdout(capsys: pytest.CaptureFixture[str]) -> None:
+    """Write CSV or JSON to stdout (no file), the same text save_trajectory writes."""
+    assert main(["simulate", str(SATURATION), "--set", "simulation.duration=0.05"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == "time,position,velocity,effort"
+    assert main(["simulate", str(SATURATION), "--json", "--set", "simulation.duration=0.05"]) == 0
+    assert len(json.loads(capsys.readouterr().out)["time"]) == 7
+
+
+@pytest.mark.parametrize(
+    ("override", "what"),
+    [
+        ("drive.damping=1e308", "the implicit drive law"),
+        ("load.external_effort=1e308", "overflowed float64"),
+        ("joint.inertia=5e-324", "overflowed float64"),
+    ],
+)
+def test_overflow_is_one_line_never_a_wrong_number(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], override: str, what: str
+) -> None:
+    """Stop with one line when a drive quantity overflows (an infinite request clamps to a wrong effort)."""
+    out = tmp_path / "run.csv"
+    assert main(["simulate", str(SATURATION), "--set", override, "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and what in err and "t = 0 s" in err
+    assert not out.exists()

@@ -14,6 +14,7 @@ from drive_envelope._src.scenario.trajectory import (
     read_trajectory,
     save_trajectory,
     trajectory_to_csv,
+    trajectory_to_json,
 )
 
 
@@ -94,10 +95,11 @@ def test_failed_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyP
     """A writer that fails midway leaves neither the target nor a temporary file."""
     import drive_envelope._src.scenario.trajectory as module
 
-    def boom(_: Trajectory) -> str:
+    def boom(trajectory: Trajectory, handle: object) -> None:
+        handle.write("time,position\n0.0,")  # type: ignore[attr-defined]
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(module, "trajectory_to_csv", boom)
+    monkeypatch.setattr(module, "write_trajectory_csv", boom)
     with pytest.raises(RuntimeError):
         module.save_trajectory(sample(), tmp_path / "out.csv")
     assert list(tmp_path.iterdir()) == []
@@ -106,3 +108,99 @@ def test_failed_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyP
 def test_csv_text_has_one_row_per_sample() -> None:
     """trajectory_to_csv writes a header plus one row per sample."""
     assert len(trajectory_to_csv(sample()).splitlines()) == 4
+
+
+def long_sample(rows: int = 70_001) -> Trajectory:
+    rng = np.random.default_rng(5)
+    return Trajectory(
+        time=np.arange(rows) * 1e-3,
+        position=rng.normal(size=rows),
+        velocity=rng.normal(size=rows) * 1e-300,  # subnormal-adjacent values round-trip too
+        effort=rng.normal(size=rows) * 1e300,
+        engine="reference",
+        name="long",
+        metadata={"dt": 1e-3},
+    )
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".json", ".parquet"])
+def test_files_written_in_blocks_round_trip_exactly(tmp_path: Path, suffix: str) -> None:
+    """Write more rows than one block in each format and read back every float bit for bit."""
+    if suffix == ".parquet":
+        pytest.importorskip("pyarrow")
+    path = tmp_path / f"out{suffix}"
+    save_trajectory(long_sample(), path)
+    back = read_trajectory(path)
+    for column in ("time", "position", "velocity", "effort"):
+        np.testing.assert_array_equal(getattr(back, column), getattr(long_sample(), column))
+    if suffix != ".csv":
+        assert back.engine == "reference" and back.metadata == {"dt": 1e-3}
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]
+
+
+def test_json_text_is_strict_json_with_the_header_first() -> None:
+    """Write JSON that the standard library reads back with the same keys and values."""
+    data = json.loads(trajectory_to_json(sample()))
+    assert list(data) == [
+        "engine",
+        "name",
+        "joint",
+        "units",
+        "metadata",
+        "time",
+        "position",
+        "velocity",
+        "effort",
+    ]
+    assert data["effort"] == [0.0, 1.0 / 3.0, -2.5]
+
+
+def test_parquet_written_elsewhere_reads_as_a_revolute_trajectory(tmp_path: Path) -> None:
+    """Read a Parquet file with the four columns and no drive-envelope metadata."""
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    path = tmp_path / "bench.parquet"
+    pq.write_table(
+        pa.table({"time": [0.0, 0.1], "position": [0, 1], "velocity": [0.5, 1.5], "effort": [0.0, 2.0]}), path
+    )
+    back = read_trajectory(path)
+    assert back.joint == "revolute" and back.name == "bench" and back.position.tolist() == [0.0, 1.0]
+    pq.write_table(pa.table({"time": [0.0], "velocity": [0.5], "effort": [0.0]}), path)
+    with pytest.raises(InputError, match="missing column"):
+        read_trajectory(path)
+
+
+def test_unknown_output_suffix_is_refused(tmp_path: Path) -> None:
+    """Refuse writing CSV text into a name whose suffix says another format."""
+    with pytest.raises(InputError, match=r"unknown suffix '\.xlsx'"):
+        save_trajectory(sample(), tmp_path / "out.xlsx")
+    save_trajectory(sample(), tmp_path / "out.xlsx", format="csv")  # named explicitly: fine
+    assert (tmp_path / "out.xlsx").read_text().startswith("time,")
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        (
+            "time,position,velocity,effort\n0,0,nan,0\n",
+            "line 2, column 'velocity': got 'nan'; expected a finite",
+        ),
+        ("time,position,velocity,effort\n0,0,0,-inf\n", "line 2, column 'effort': got '-inf'"),
+        ("time,position,velocity,velocity,effort\n0,0,0,1,0\n", "column 'velocity' appears 2 times"),
+    ],
+)
+def test_non_finite_cells_and_repeated_columns_are_refused(tmp_path: Path, text: str, needle: str) -> None:
+    """Refuse NaN, inf and a repeated column: a plot would drop or mix them without a word."""
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=needle):
+        read_trajectory(path)
+
+
+def test_header_spaces_are_accepted_and_non_finite_arrays_refused(tmp_path: Path) -> None:
+    """Read 'time, position, velocity, effort'; refuse a Trajectory holding NaN."""
+    path = tmp_path / "spaced.csv"
+    path.write_text("time, position, velocity, effort\n0, 0, 1.5, 2\n")
+    assert read_trajectory(path).velocity.tolist() == [1.5]
+    with pytest.raises(InputError, match=r"column 'velocity', row 1 is nan"):
+        Trajectory(time=np.zeros(2), position=np.zeros(2), velocity=[0.0, np.nan], effort=np.zeros(2))

@@ -2,7 +2,8 @@
 
 ``check_log(envelopes, "log.csv")`` streams a CSV or Parquet log (or an in-memory table) in chunks
 and returns a :class:`CheckReport`: per joint the fraction of samples outside the envelope, by which
-curve, the worst violation and where, the margin distribution and the time spent on each limit.
+curve, the worst violation and where, the margin distribution and the time spent on each limit, and
+the samples "released" (zero effort beyond the speed line: PhysX's drive let go), counted apart.
 ``fit_log("sweep.csv")`` / ``fit_samples(velocity, effort)`` / ``fit_curve("diagram.csv")`` return a
 :class:`FitResult`: the tightest envelope of the spec's form containing the samples (up to an
 outlier quantile), each parameter with a bootstrap uncertainty, and the residuals.
@@ -23,6 +24,7 @@ from drive_envelope._src.analysis.api import (
     resolve_envelopes,
 )
 from drive_envelope._src.analysis.check import (
+    DEFAULT_MAX_JOINTS,
     MARGIN_QUANTILES,
     CheckOptions,
     CheckReport,
@@ -38,6 +40,7 @@ from drive_envelope._src.analysis.mapping import JointMapping, load_joint_mappin
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",
+    "DEFAULT_MAX_JOINTS",
     "MARGIN_QUANTILES",
     "CheckOptions",
     "CheckReport",

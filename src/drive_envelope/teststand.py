@@ -3,7 +3,8 @@
 ``load_scenario("stand.toml", overrides=["drive.target_velocity=12"])`` reads a scenario file,
 ``simulate(scenario, engine="reference")`` runs it and returns a :class:`Trajectory` (time,
 position, velocity and the step-average total actuator effort, SI), which ``save_trajectory`` writes
-as CSV or JSON. The ``reference`` engine is a float64 NumPy model of the PhysX articulation solver
+as CSV, JSON or Parquet. A run of more than ``max_steps`` steps (:data:`MAX_STEPS` by default) is
+refused before it starts. The ``reference`` engine is a float64 NumPy model of the PhysX articulation solver
 (PGS and TGS); ``mujoco`` and ``physx`` need their extras.
 """
 
@@ -25,10 +26,11 @@ from drive_envelope._src.scenario.trajectory import (
     trajectory_to_csv,
     trajectory_to_json,
 )
-from drive_envelope._src.teststand.engines import ENGINES, engine_names, simulate
+from drive_envelope._src.teststand.engines import ENGINES, MAX_STEPS, engine_names, simulate
 
 __all__ = [
     "ENGINES",
+    "MAX_STEPS",
     "DriveSpec",
     "JointSpec",
     "LoadSpec",

@@ -145,11 +145,21 @@ def fit_log(
         InputError: unreadable log, several joints without ``select``, too few samples.
     """
     chunk = read_log(log, columns, engine=engine)
-    velocity, effort = _select_joint(chunk, select, source_label(log))
+    label = source_label(log)
+    velocity, effort = _select_joint(chunk, select, label)
     options = options or FitOptions()
     if select and not options.name:
         options = replace(options, name=select)
-    return fit_samples(velocity, effort, options)
+    where = f"{label}: joint {select!r}" if select else label
+    return _fit_from(where, velocity, effort, options)
+
+
+def _fit_from(where: str, velocity: Any, effort: Any, options: FitOptions) -> FitResult:
+    """:func:`fit_samples`, its errors about the samples naming where they came from."""
+    try:
+        return fit_samples(velocity, effort, options)
+    except InputError as exc:
+        raise InputError(f"{where}: {str(exc).removeprefix('fit: ')}") from None
 
 
 def fit_curve(
@@ -170,6 +180,6 @@ def fit_curve(
     curve_options = replace(options, outlier_quantile=0.0, bootstrap=0, min_segment_samples=2)
     if not curve_options.name:
         curve_options = replace(curve_options, name=Path(path).stem)
-    result = fit_samples(velocity, effort, curve_options)
+    result = _fit_from(str(path), velocity, effort, curve_options)
     note = "digitized curve: every point kept, no bootstrap; the residuals show the digitizing scatter"
     return replace(result, notes=(*result.notes, note))

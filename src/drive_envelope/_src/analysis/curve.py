@@ -48,11 +48,20 @@ def _split_header(cell: str) -> tuple[str, str]:
 def _find(
     names: list[str], wanted: str, aliases: tuple[str, ...], default: str, label: str, flag: str
 ) -> int:
-    candidates = [wanted.lower()] + (list(aliases) if wanted == default else [])
+    """The one column named ``wanted`` (or, for the default name, one of its aliases)."""
+    candidates = [wanted.strip().lower()] + (list(aliases) if wanted == default else [])
     for candidate in candidates:
-        if candidate in names:
-            return names.index(candidate)
-    raise InputError(f"{label}: no column {wanted!r} (columns: {', '.join(names)}); name it with {flag}")
+        if names.count(candidate) > 1:
+            raise InputError(f"{label}: column {candidate!r} appears {names.count(candidate)} times")
+    found = [name for name in dict.fromkeys(names) if name in candidates]
+    if len(found) > 1:
+        raise InputError(
+            f"{label}: columns {', '.join(map(repr, found))} could each be the {default}; "
+            f"name the one to use with {flag}"
+        )
+    if not found:
+        raise InputError(f"{label}: no column {wanted!r} (columns: {', '.join(names)}); name it with {flag}")
+    return names.index(found[0])
 
 
 def read_curve(
@@ -82,8 +91,8 @@ def read_curve(
             ]
     except FileNotFoundError:
         raise InputError(f"{label}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{label}: cannot read: {exc}") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:  # csv.Error: a field over its size limit
+        raise InputError(f"{label}: cannot read: {' '.join(str(exc).split())}") from None
     if not rows:
         raise InputError(
             f"{label}: empty file (expected a header such as 'speed [rpm],torque [mNm]' and points)"

@@ -33,6 +33,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
@@ -59,24 +60,32 @@ class FitOptions:
     fixed: Mapping[str, float] = field(default_factory=dict)
     """Parameters held at given values [SI], by field name (``max_actuator_velocity`` may be inf)."""
     bootstrap: int = 200
-    """Bootstrap resamples for the uncertainties; 0 skips them."""
+    """Bootstrap resamples for the uncertainties, 0 .. :data:`MAX_BOOTSTRAP`; 0 skips them."""
     seed: int = 0
-    """Seed of the bootstrap's random generator (results are reproducible)."""
+    """Seed of the bootstrap's random generator, an integer >= 0 (results are reproducible)."""
     min_segment_samples: int | None = None
     """Fewest samples that identify a line; None: ``max(5, 2 %)`` of the samples."""
     name: str = ""
     """Name written into the fitted envelope."""
 
     def __post_init__(self) -> None:
-        if not (0.0 <= self.outlier_quantile <= 0.5):
-            raise InputError(f"outlier-quantile must be in [0, 0.5], got {self.outlier_quantile!r}")
-        if not (isinstance(self.bootstrap, int) and self.bootstrap >= 0):
-            raise InputError(f"bootstrap must be an integer >= 0, got {self.bootstrap!r}")
+        if self.joint not in ("revolute", "prismatic"):
+            raise InputError(f"joint: expected 'revolute' or 'prismatic', got {self.joint!r}")
+        quantile = self.outlier_quantile
+        if isinstance(quantile, bool) or not isinstance(quantile, (int, float)) or not 0.0 <= quantile <= 0.5:
+            raise InputError(f"outlier-quantile: expected a number in [0, 0.5], got {quantile!r}")
+        check_count("bootstrap", self.bootstrap, MAX_BOOTSTRAP)
+        check_count("seed", self.seed, None)
+        least = self.min_segment_samples
+        if least is not None and (isinstance(least, bool) or not isinstance(least, int) or least < 2):
+            raise InputError(f"min_segment_samples: expected an integer >= 2 or None, got {least!r}")
         for key, value in self.fixed.items():
             if key not in ENVELOPE_FIELDS:
                 raise InputError(
                     f"fix: unknown parameter {key!r}; expected one of {', '.join(ENVELOPE_FIELDS)}"
                 )
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise InputError(f"fix: {key} must be a number, got {value!r}")
             if not value >= 0.0 or (math.isinf(value) and key != "max_actuator_velocity"):
                 raise InputError(
                     f"fix: {key} must be >= 0 and finite (only max_actuator_velocity may be inf), "
@@ -387,19 +396,11 @@ def fit_samples(
         and the residuals.
 
     Raises:
-        InputError: arrays of different shapes, fewer than 3 samples, NaN or infinite values.
+        InputError: arrays of different shapes, fewer than 3 samples, NaN or infinite values,
+            magnitudes above :data:`MAX_SAMPLE`.
     """
     options = options or FitOptions()
-    x = np.abs(np.asarray(velocity, dtype=np.float64)).ravel()
-    y = np.abs(np.asarray(effort, dtype=np.float64)).ravel()
-    if x.shape != y.shape:
-        raise InputError(
-            f"velocity and effort must have the same number of samples, got {x.size} and {y.size}"
-        )
-    if x.size < 3:
-        raise InputError(f"fit needs at least 3 samples, got {x.size}")
-    if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        raise InputError("fit: velocity and effort samples must be finite numbers (no NaN or inf)")
+    x, y = fit_samples_input(velocity, effort)
     q, fixed = options.outlier_quantile, dict(options.fixed)
     least = options.min_segment_samples or max(5, math.ceil(0.02 * x.size))
     model, note = _choose_model(x, y, q, fixed, least)

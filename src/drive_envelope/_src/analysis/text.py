@@ -38,6 +38,15 @@ def _where(check: JointCheck) -> str:
     )
 
 
+def _released(check: JointCheck) -> str:
+    during = "" if check.time_released is None else f" ({check.time_released:.6g} s)"
+    return (
+        f"released: {check.samples_released} samples{during} above the speed line with zero effort: "
+        "something else drove the joint past the no-load speed and the drive let go, as PhysX's does "
+        "(not counted as outside)"
+    )
+
+
 def _margin_row(summary: MarginSummary) -> list[str]:
     quantiles = dict(summary.quantiles)
     return [
@@ -66,7 +75,7 @@ def format_check(report: CheckReport) -> str:
         lines.append("")
         lines.append(
             f"joint {check.joint!r}: {check.samples} samples{duration}, {check.samples_outside} outside "
-            f"({_percent(check.fraction_outside)}) -> {status}"
+            f"({_percent(check.fraction_outside)}), {check.samples_released} released -> {status}"
         )
         rows = [_margin_row(check.effort)]
         if check.velocity is not None:
@@ -75,6 +84,8 @@ def format_check(report: CheckReport) -> str:
         if check.velocity is None:
             lines.append("eq. 2 not checked: max_actuator_velocity is inf")
         lines.append(_where(check))
+        if check.samples_released:
+            lines.append(_released(check))
     verdict = "PASSED" if report.passed else "FAILED"
     lines.append("")
     lines.append(f"{verdict}: tolerance {_percent(options.tolerance)} of samples outside per joint")
@@ -120,10 +131,11 @@ def format_fit(result: FitResult) -> str:
     return "\n".join(lines)
 
 
-def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
+def plot_check(report: CheckReport, path: str | os.PathLike[str], *, force: bool = False) -> list[Path]:
     """Write one envelope plot per joint with its violations in red; return the files written.
 
     With one joint the plot goes to ``path``; with several, to ``<stem>-<joint><suffix>`` beside it.
+    ``force`` replaces read-only files.
 
     Raises:
         InputError: matplotlib is missing, no points were kept, or an unsupported suffix.
@@ -134,7 +146,7 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
         raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
 
     from drive_envelope._src.plots.curve import OperatingPoints
-    from drive_envelope._src.plots.figure import plot_envelope, save_figure
+    from drive_envelope._src.plots.figure import plain_text, plot_envelope, save_figure
 
     target = Path(path)
     written = []
@@ -142,16 +154,15 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str]) -> list[Path]:
         points = check.points
         if points is None:
             raise InputError("plot: the check kept no points (CheckOptions.keep_points = 0)")
+        name = plain_text(check.joint)  # a joint name from the log is text, never mathtext
         samples = OperatingPoints(
-            velocity=points.velocity, effort=points.effort, time=points.time, label=check.joint
+            velocity=points.velocity, effort=points.effort, time=points.time, label=name
         )
         figure = Figure(figsize=(7.0, 6.4), layout="constrained")
         axes = figure.add_subplot(111)
-        plot = plot_envelope(
-            check.envelope, points=samples, ax=axes, highlight=points.outside, title=check.joint
-        )
+        plot = plot_envelope(check.envelope, points=samples, ax=axes, highlight=points.outside, title=name)
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in check.joint)
         out = target if len(report.joints) == 1 else target.with_name(f"{target.stem}-{safe}{target.suffix}")
-        save_figure(plot, out)
+        save_figure(plot, out, force=force)
         written.append(out)
     return written

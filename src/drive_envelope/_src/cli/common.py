@@ -5,6 +5,9 @@
   there is never a second flag for the same choice.
 * Status lines (``wrote ...``) and warnings go to stderr, so stdout stays pipeable.
 * Repeatable options use ``action="append"``.
+* ``--force`` on every command that writes: replace a read-only output file.
+* A bad flag is one line on stderr and exit 2, like every other user mistake (:class:`Parser`).
+* A long run shows its progress on stderr, and only when stderr is a terminal (:class:`Progress`).
 
 This module is imported for ``--help``: it stays free of NumPy, pint and every engine.
 """
@@ -12,14 +15,79 @@ This module is imported for ``--help``: it stays free of NumPy, pint and every e
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import NoReturn, TextIO
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["add_format_argument", "add_output_argument", "checked_output", "status", "warn"]
+__all__ = [
+    "Parser",
+    "Progress",
+    "add_force_argument",
+    "add_format_argument",
+    "add_output_argument",
+    "checked_output",
+    "fraction",
+    "integer_at_least",
+    "status",
+    "warn",
+]
 
 PROG = "drive-envelope"
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (``PROG CMD: error: ...``) and exit status 2.
+
+    argparse prints the whole usage before the error; here the error names the flag and the value,
+    and ``--help`` has the usage. Subcommand parsers inherit the class.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``message`` as one line on stderr and exit with status 2."""
+        text = " ".join(message.split())
+        self.exit(2, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
+
+
+def fraction(text: str) -> float:
+    """Argument type: a number in [0, 1] (``--tolerance 0.01``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text!r}")
+    return value
+
+
+def integer_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
+    """Argument type: an integer in ``[low, high]`` (``--seed``, ``--bootstrap``, ``--max-steps``).
+
+    Accepts ``1e8``-style spellings of whole numbers, so large counts can be written readably.
+    """
+
+    def parse(text: str) -> int:
+        digits = text.strip().lstrip("+-")
+        try:
+            if digits.isdigit():
+                whole, value = True, int(text)
+            else:  # 1e8: a whole number written as a float
+                number = float(text)
+                whole = math.isfinite(number) and number.is_integer()
+                value = int(number) if whole else 0
+        except ValueError:
+            whole, value = False, 0
+        if not whole or value < low or (high is not None and value > high):
+            span = f"in {low}..{high}" if high is not None else f">= {low}"
+            raise argparse.ArgumentTypeError(f"expected an integer {span}, got {text!r}")
+        return value
+
+    parse.__name__ = "integer"  # argparse names the type in its own messages
+    return parse
 
 
 def add_output_argument(
@@ -38,6 +106,13 @@ def add_format_argument(parser: argparse.ArgumentParser, choices: tuple[str, ...
         parser.add_argument(
             "--json", dest="format", action="store_const", const="json", help="short for --format json"
         )
+
+
+def add_force_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--force``: replace an output file even when it is read-only."""
+    parser.add_argument(
+        "--force", action="store_true", help="replace an output file even when it is read-only"
+    )
 
 
 def status(message: str) -> None:
@@ -63,3 +138,46 @@ def checked_output(output: str | None, flag: str = "--output") -> str | None:
     if Path(output).is_dir():
         raise InputError(f"{flag} {output!r}: is a folder; expected a file name")
     return output
+
+
+class Progress:
+    """A one-line progress bar on stderr for long runs, shown only when stderr is a terminal.
+
+    Call it with ``(done, total)`` as often as convenient: it draws at most every 0.2 s, and only
+    once the run has lasted 1 s, so short runs print nothing. :meth:`close` ends the line.
+    """
+
+    def __init__(self, label: str, *, stream: TextIO | None = None, delay: float = 1.0) -> None:
+        self.label = label
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = self.stream.isatty()
+        self.delay = delay
+        self.start = time.monotonic()
+        self.drawn_at = -math.inf
+        self.shown = False
+
+    def __call__(self, done: int, total: int) -> None:
+        """Report ``done`` of ``total`` steps."""
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        elapsed = now - self.start
+        if elapsed < self.delay or now - self.drawn_at < 0.2:
+            return
+        self.drawn_at = now
+        share = done / total if total else 1.0
+        width = 30
+        filled = min(width, int(share * width))
+        left = elapsed * (1.0 - share) / share if share > 0 else math.inf
+        eta = f", {left:.0f} s left" if math.isfinite(left) else ""
+        bar = "#" * filled + "." * (width - filled)
+        self.stream.write(f"\r{self.label} [{bar}] {100 * share:5.1f} % ({done}/{total}{eta})")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        """Finish the bar's line (a no-op when nothing was drawn)."""
+        if self.shown:
+            self.stream.write("\n")
+            self.stream.flush()
+            self.shown = False

@@ -1,9 +1,10 @@
 """The ``drive-envelope`` command line: every subcommand, registered explicitly in :data:`COMMANDS`.
 
-Every user mistake ends in one line on stderr (``drive-envelope: error: ...``) and exit status 2. A
-bug ends in one line too (exit 1), with a hint to report it; ``DRIVE_ENVELOPE_TRACEBACK=1`` shows
-the traceback. Building the parser imports only the command modules, which import their work
-lazily, so ``--help`` and argument errors load neither NumPy nor an engine.
+Every user mistake ends in one line on stderr (``drive-envelope: error: ...``) and exit status 2,
+a bad flag included (:class:`~drive_envelope._src.cli.common.Parser`). A bug ends in one line too
+(exit 1), with a hint to report it; ``DRIVE_ENVELOPE_TRACEBACK=1`` shows the traceback. Building
+the parser imports only the command modules, which import their work lazily, so ``--help`` and
+argument errors load neither NumPy nor an engine.
 """
 
 from __future__ import annotations
@@ -13,14 +14,24 @@ import os
 import sys
 from collections.abc import Sequence
 
-from drive_envelope._src.cli.commands import catalog, check, derive, envelope, fit, plot, simulate, usd
-from drive_envelope._src.cli.common import PROG
+from drive_envelope._src.cli.commands import (
+    catalog,
+    check,
+    derive,
+    envelope,
+    fit,
+    mujoco,
+    plot,
+    simulate,
+    usd,
+)
+from drive_envelope._src.cli.common import PROG, Parser
 from drive_envelope._src.errors import DriveEnvelopeError
 from drive_envelope._src.version import VERSION
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
-COMMANDS = (derive, catalog, envelope, simulate, plot, usd, check, fit)
+COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit)
 """The subcommand modules, in the order ``--help`` lists them; each has ``register(subparsers)``."""
 
 _ISSUES = "https://github.com/drive-envelope/drive-envelope/issues"
@@ -28,7 +39,7 @@ _ISSUES = "https://github.com/drive-envelope/drive-envelope/issues"
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser, with every subcommand of :data:`COMMANDS` registered."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog=PROG,
         description="The PhysX drive performance envelope: derive, inspect, simulate, check.",
     )
@@ -42,7 +53,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit status (0 ok, 1 a check failed or a bug, 2 bad input)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a bad flag (one line, see Parser): its status
+        return exc.code if isinstance(exc.code, int) else 2
     if getattr(args, "func", None) is None:
         parser.print_help()
         return 2

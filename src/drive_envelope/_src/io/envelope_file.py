@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Literal
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.io.atomic import atomic_write_text
 from drive_envelope._src.io.files import format_toml_value, read_mapping
@@ -51,11 +52,26 @@ def save_envelope(
     path: str | os.PathLike[str],
     *,
     format: Literal["toml", "json"] | None = None,
+    force: bool = False,
 ) -> None:
-    """Write an envelope file atomically; the format follows the suffix unless ``format`` is given."""
-    chosen = format or ("json" if Path(path).suffix.lower() == ".json" else "toml")
+    """Write an envelope file atomically; the format follows the suffix unless ``format`` is given.
+
+    Args:
+        envelope: The envelope.
+        path: Output file (``.json`` for JSON, anything else TOML).
+        format: ``"toml"`` or ``"json"``; None: from the suffix.
+        force: Replace ``path`` even when it is read-only.
+
+    Raises:
+        InputError: a suffix other than ``.toml`` or ``.json`` without ``format``, or the file cannot
+            be written (missing folder, a folder, read-only, a full disk).
+    """
+    suffix = Path(path).suffix.lower()
+    if format is None and suffix not in (".toml", ".json"):
+        raise InputError(f"{str(path)!r}: expected an envelope file name ending in .toml or .json")
+    chosen = format or ("json" if suffix == ".json" else "toml")
     text = envelope_to_json(envelope) if chosen == "json" else envelope_to_toml(envelope)
-    atomic_write_text(path, text)
+    atomic_write_text(path, text, force=force)
 
 
 def envelope_table(envelope: PerformanceEnvelope) -> str:
@@ -69,12 +85,10 @@ def envelope_table(envelope: PerformanceEnvelope) -> str:
     parts.append(title)
     parts.append(format_table(["parameter", "value", "unit"], rows))
     v_unit, e_unit = si_unit("max_actuator_velocity", envelope.joint), si_unit("max_effort", envelope.joint)
-    extent = None
-    if math.isinf(envelope.no_load_velocity()):
-        extent = 1.0
-    corners = envelope.corners(velocity_extent=extent)
+    unbounded = math.isinf(envelope.no_load_velocity())
+    corners = envelope.corners(velocity_extent=1.0 if unbounded else None)
     corner_rows = [["stall", *map(format_value, corners.stall)]]
-    if corners.corner is not None:
+    if corners.corner is not None and not unbounded:  # unbounded: the "corner" is only the cut at 1
         corner_rows.append(["corner (both curves bind)", *map(format_value, corners.corner)])
     no_load = (envelope.no_load_velocity(), 0.0)
     corner_rows.append(["no-load", *map(format_value, no_load)])

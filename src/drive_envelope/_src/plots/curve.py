@@ -3,6 +3,11 @@
 :func:`envelope_curve` returns an :class:`EnvelopeCurve`: the feasible polygon in all four
 quadrants, the sampled effort limit, the two boundary lines with their equations and parameter
 values, and the first-quadrant corner points. :func:`drive_envelope.plots.plot_envelope` draws it.
+
+Every number drawn is finite and every window half-width lies in [:data:`MIN_EXTENT`,
+:data:`MAX_EXTENT`], the range matplotlib draws to scale (it widens a smaller window on its own and
+overflows on a larger one); anything else is an :class:`InputError`, never a figure that is silently
+not to scale. Operating points with NaN or inf are refused, not dropped.
 """
 
 from __future__ import annotations
@@ -17,7 +22,20 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["BoundaryLine", "CornerPoint", "EnvelopeCurve", "OperatingPoints", "envelope_curve"]
+__all__ = [
+    "MAX_EXTENT",
+    "MIN_EXTENT",
+    "BoundaryLine",
+    "CornerPoint",
+    "EnvelopeCurve",
+    "OperatingPoints",
+    "envelope_curve",
+]
+
+MIN_EXTENT = 1e-280
+"""Smallest half-width of a plot window [SI]: below it matplotlib widens the axis by itself."""
+MAX_EXTENT = 1e300
+"""Largest half-width of a plot window [SI]: beyond it matplotlib's transforms overflow."""
 
 FloatArray = npt.NDArray[np.float64]
 _MARGIN = 1.15  # plot window beyond the region's extreme points
@@ -79,6 +97,13 @@ class OperatingPoints:
                 if a is not None
             )
             raise InputError(f"OperatingPoints: expected 1-D arrays of one length, got {given}")
+        for name, values in (("velocity", velocity), ("effort", effort), ("time", time)):
+            if values is not None and not np.isfinite(values).all():
+                bad = int(np.flatnonzero(~np.isfinite(values))[0])
+                raise InputError(
+                    f"operating points {self.label or ''!r}: {name}[{bad}] is {float(values[bad])!r}; "
+                    "expected finite numbers (remove such samples before plotting)"
+                )
         object.__setattr__(self, "velocity", velocity)
         object.__setattr__(self, "effort", effort)
         object.__setattr__(self, "time", time)
@@ -136,43 +161,116 @@ def envelope_curve(
         samples: Number of sampled velocities, ``>= 2``.
 
     Raises:
-        InputError: a non-positive extent or fewer than 2 samples.
+        InputError: an extent that is not a finite number > 0, a window outside [MIN_EXTENT,
+            MAX_EXTENT] (e.g. ``max_effort = 1e308``), or fewer than 2 samples.
     """
-    if samples < 2:
-        raise InputError(f"samples must be >= 2, got {samples!r}")
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
+        raise InputError(f"samples must be an integer >= 2, got {samples!r}")
+    velocity_unit = si_unit("max_actuator_velocity", envelope.joint)
+    effort_unit = si_unit("max_effort", envelope.joint)
     no_load = envelope.no_load_velocity()
-    v_ext = _extent(velocity_extent, no_load * _MARGIN if math.isfinite(no_load) else 1.0, "velocity_extent")
-    e_ext = _extent(
-        effort_extent, max(envelope.stall_effort(), envelope.max_effort) * _MARGIN, "effort_extent"
-    )
+    with np.errstate(over="ignore"):  # 1.15 x a value near the float limit: inf, refused below
+        default_v = no_load * _MARGIN if math.isfinite(no_load) else 1.0
+        default_e = max(envelope.stall_effort(), envelope.max_effort) * _MARGIN
+    v_ext = _plottable(_extent(velocity_extent, default_v, "velocity_extent"), "velocity", velocity_unit)
+    e_ext = _plottable(_extent(effort_extent, default_e, "effort_extent"), "effort", effort_unit)
     cut = min(v_ext, no_load)
-    polygon = envelope.boundary(velocity_extent=cut) if cut > 0.0 else np.zeros((1, 2))
+    polygon = _region(envelope, cut, e_ext) if cut > 0.0 else np.zeros((1, 2))
     velocity = np.linspace(-v_ext, v_ext, samples)
     return EnvelopeCurve(
         envelope=envelope,
         boundary=polygon,
         velocity=velocity,
-        effort_limit=envelope.effort_limit(velocity),
+        effort_limit=_effort_limit(envelope, velocity),
         lines=_lines(envelope, v_ext, e_ext),
         corners=_corner_points(envelope),
         velocity_extent=v_ext,
         effort_extent=e_ext,
-        velocity_unit=si_unit("max_actuator_velocity", envelope.joint),
-        effort_unit=si_unit("max_effort", envelope.joint),
+        velocity_unit=velocity_unit,
+        effort_unit=effort_unit,
     )
+
+
+def _effort_limit(envelope: PerformanceEnvelope, velocity: FloatArray) -> FloatArray:
+    """The effort limit at ``velocity`` [N*m or N]; R*|v| beyond float range is a limit of 0, silently."""
+    with np.errstate(over="ignore"):
+        return envelope.effort_limit(velocity)
 
 
 def _extent(value: float | None, default: float, name: str) -> float:
     if value is None:
         return default if default > 0.0 else 1.0
-    if not (math.isfinite(value) and value > 0.0):
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not (math.isfinite(value) and value > 0.0)
+    ):
         raise InputError(f"{name} must be a finite number > 0, got {value!r}")
     return float(value)
+
+
+def _plottable(extent: float, axis: str, unit: str) -> float:
+    """``extent`` when matplotlib can draw a window of that half-width to scale, else an error."""
+    if MIN_EXTENT <= extent <= MAX_EXTENT:
+        return extent
+    large = not extent < MAX_EXTENT
+    raise InputError(
+        f"cannot plot: the {axis} axis would span +-{extent:.6g} {unit}, too {'large' if large else 'small'} "
+        f"to draw to scale (expected a half-width {'at most' if large else 'at least'} "
+        f"{MAX_EXTENT if large else MIN_EXTENT:g} {unit})"
+    )
+
+
+def _region(envelope: PerformanceEnvelope, cut: float, e_ext: float) -> FloatArray:
+    """The feasible polygon, computed on unit scales so tiny or huge envelopes keep every corner."""
+    e_scale = max(envelope.stall_effort(), envelope.max_effort, 0.0) or e_ext
+    with np.errstate(over="ignore", under="ignore"):
+        unit = {
+            "max_effort": envelope.max_effort / e_scale,
+            "max_actuator_velocity": envelope.max_actuator_velocity / cut,
+            "velocity_dependent_resistance": envelope.velocity_dependent_resistance * (cut / e_scale),
+            "speed_effort_gradient": envelope.speed_effort_gradient * (e_scale / cut),
+        }
+    if not all(math.isfinite(value) for key, value in unit.items() if key != "max_actuator_velocity"):
+        return envelope.boundary(velocity_extent=cut)  # a scale beyond float range: draw it unscaled
+    scaled = PerformanceEnvelope(
+        max_effort=unit["max_effort"],
+        max_actuator_velocity=unit["max_actuator_velocity"],
+        velocity_dependent_resistance=unit["velocity_dependent_resistance"],
+        speed_effort_gradient=unit["speed_effort_gradient"],
+        joint=envelope.joint,
+    )
+    return scaled.boundary(velocity_extent=1.0) * np.array([cut, e_scale])
 
 
 def _mirror(first_quadrant: FloatArray) -> FloatArray:
     """``(2, 2)`` end points in quadrant I -> ``(4, 2, 2)`` in quadrants I..IV."""
     return first_quadrant[None, :, :] * _QUADRANT_SIGNS[:, None, :] + 0.0  # + 0.0: no -0.0
+
+
+def _clip(segment: FloatArray, v_ext: float, e_ext: float) -> FloatArray:
+    """The part of a first-quadrant segment inside the window [0, v_ext] x [0, e_ext] (Liang-Barsky).
+
+    A line far outside the window (``max_actuator_velocity = 1e308`` beside a small no-load speed)
+    would overflow matplotlib's transforms; outside entirely, its end points are NaN (not drawn).
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        start, delta = segment[0], segment[1] - segment[0]
+        low, high = 0.0, 1.0
+        for axis, extent in ((0, v_ext), (1, e_ext)):
+            for p, q in ((-delta[axis], start[axis]), (delta[axis], extent - start[axis])):
+                if p == 0.0:
+                    if q < 0.0:
+                        return np.full((2, 2), np.nan)
+                    continue
+                t = q / p
+                if not math.isfinite(t):
+                    continue
+                low, high = (max(low, t), high) if p < 0.0 else (low, min(high, t))
+        if low > high:
+            return np.full((2, 2), np.nan)
+        clipped = np.array([start + low * delta, start + high * delta])
+    return clipped if np.isfinite(clipped).all() else np.full((2, 2), np.nan)
 
 
 def _fmt(value: float) -> str:
@@ -195,7 +293,7 @@ def _lines(env: PerformanceEnvelope, v_ext: float, e_ext: float) -> tuple[Bounda
                 f"({sym_e}_max = {_fmt(env.max_effort)} {units['max_effort']}, "
                 f"k_{sym_e}v = {_fmt(resistance)} {r_unit})"
             ),
-            segments=_mirror(eq1),
+            segments=_mirror(_clip(eq1, v_ext, e_ext)),
         )
     ]
     if math.isfinite(env.max_actuator_velocity):
@@ -212,7 +310,7 @@ def _lines(env: PerformanceEnvelope, v_ext: float, e_ext: float) -> tuple[Bounda
                     f"(v_max = {_fmt(vmax)} {units['max_actuator_velocity']}, "
                     f"k_v{sym_e} = {_fmt(gradient)} {g_unit})"
                 ),
-                segments=_mirror(eq2),
+                segments=_mirror(_clip(eq2, v_ext, e_ext)),
             )
         )
     return tuple(lines)

@@ -4,6 +4,12 @@
 an :class:`EnvelopePlot` handle (``.figure``, ``.axes``, ``.lines``); :func:`save_figure` writes it
 atomically. Figures are built with ``matplotlib.figure.Figure`` (Agg canvas), never pyplot, so no
 GUI backend or global figure state is touched.
+
+Text: a title or label given to :func:`plot_envelope` may use matplotlib mathtext (``$x_1$``);
+mathtext that does not parse (``$x^$``) is an :class:`InputError` naming the text, raised before
+anything is drawn. Names that come from data files (an envelope's name, a trajectory's, a joint's)
+are drawn as they are written: pass them through :func:`plain_text`. Raster output is limited to
+:data:`MAX_PIXELS_PER_SIDE` pixels per side and :data:`MAX_PIXELS` in all.
 """
 
 from __future__ import annotations
@@ -20,16 +26,31 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
-from drive_envelope._src.plots.curve import EnvelopeCurve, OperatingPoints, envelope_curve
+from drive_envelope._src.plots.curve import MAX_EXTENT, EnvelopeCurve, OperatingPoints, envelope_curve
 
-__all__ = ["FIGURE_SUFFIXES", "EnvelopePlot", "plot_envelope", "save_figure"]
+__all__ = [
+    "FIGURE_SUFFIXES",
+    "MAX_PIXELS",
+    "MAX_PIXELS_PER_SIDE",
+    "EnvelopePlot",
+    "check_figure_path",
+    "check_text",
+    "plain_text",
+    "plot_envelope",
+    "save_figure",
+]
 
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 """File types :func:`save_figure` writes."""
+MAX_PIXELS_PER_SIDE = 65535
+"""Widest and tallest raster figure [pixels]: the limit of matplotlib's Agg canvas."""
+MAX_PIXELS = 1 << 27
+"""Most pixels of a raster figure (512 MiB of RGBA) [pixels]."""
 
 _REGION_COLOUR = "#9ecae1"
 _LINE_COLOURS = {"eq1": "#d62728", "eq2": "#1f77b4"}
 _MARKERS = ("o", "s", "^", "D", "v", "P")
+_POINT_MARGIN = 1.15  # the window reaches this far beyond the outermost operating point
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -58,6 +79,43 @@ def _matplotlib() -> Any:
     return Figure
 
 
+def plain_text(text: str) -> str:
+    """``text`` drawn literally: its dollar signs escaped, so mathtext never reads a name from a file."""
+    return text.replace("\\$", "$").replace("$", "\\$")
+
+
+def check_text(text: str, where: str) -> str:
+    """``text`` when matplotlib can draw it (valid mathtext, if any); else an error naming ``where``.
+
+    Raises:
+        InputError: mathtext between unescaped dollar signs that does not parse (e.g. ``$x^$``).
+    """
+    if text.count("$") - text.count("\\$") < 2:
+        return text  # no math: drawn as written
+    from matplotlib.mathtext import MathTextParser
+
+    try:
+        MathTextParser("path").parse(text)
+    except ValueError:
+        raise InputError(
+            f"{where} {text!r}: not valid matplotlib mathtext between the dollar signs; "
+            "write \\$ for a dollar sign"
+        ) from None
+    return text
+
+
+def check_figure_path(path: str | os.PathLike[str], flag: str = "--output") -> Path:
+    """``path`` as a Path when its suffix is one :func:`save_figure` writes.
+
+    Raises:
+        InputError: a suffix other than ``.png``, ``.svg`` or ``.pdf``.
+    """
+    target = Path(path)
+    if target.suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(f"{flag} {str(target)!r}: expected a .png, .svg or .pdf file name")
+    return target
+
+
 def _as_list(points: OperatingPoints | Sequence[OperatingPoints] | None) -> list[OperatingPoints]:
     if points is None:
         return []
@@ -77,13 +135,19 @@ def _window(
     if isinstance(curve_or_envelope, EnvelopeCurve):
         return curve_or_envelope
     env = curve_or_envelope
-    v_ext = e_ext = None
-    if trajectories:
-        speeds = [float(np.max(np.abs(t.velocity), initial=0.0)) for t in trajectories]
-        efforts = [float(np.max(np.abs(t.effort), initial=0.0)) for t in trajectories]
-        base = envelope_curve(env)
-        v_ext = max(base.velocity_extent, 1.15 * max(speeds))
-        e_ext = max(base.effort_extent, 1.15 * max(efforts))
+    base = envelope_curve(env)
+    if not trajectories:
+        return base
+    v_ext, e_ext = base.velocity_extent, base.effort_extent
+    for index, traj in enumerate(trajectories):
+        speed = float(np.max(np.abs(traj.velocity), initial=0.0))
+        effort = float(np.max(np.abs(traj.effort), initial=0.0))
+        if max(speed, effort) * _POINT_MARGIN > MAX_EXTENT:
+            raise InputError(
+                f"operating points {traj.label or index + 1!r}: |velocity| up to {speed:.6g} and |effort| "
+                f"up to {effort:.6g} [SI]; expected values below {MAX_EXTENT / _POINT_MARGIN:.6g} to plot"
+            )
+        v_ext, e_ext = max(v_ext, _POINT_MARGIN * speed), max(e_ext, _POINT_MARGIN * effort)
     return envelope_curve(env, velocity_extent=v_ext, effort_extent=e_ext)
 
 
@@ -111,10 +175,15 @@ def plot_envelope(
         The :class:`EnvelopePlot` handle.
 
     Raises:
-        InputError: matplotlib is missing, or ``highlight`` does not match the points.
+        InputError: matplotlib is missing, ``highlight`` does not match the points, a title or label
+            is mathtext that does not parse, or the window cannot be drawn to scale.
     """
     figure_cls = _matplotlib()
     trajectories = _as_list(points)
+    if title is not None:
+        check_text(title, "title")
+    for index, traj in enumerate(trajectories):
+        check_text(traj.label, f"points {index + 1} label")
     curve = _window(curve_or_envelope, trajectories)
     if ax is None:
         figure = figure_cls(figsize=(12.0, 6.2) if trajectories else (7.0, 6.4), layout="constrained")
@@ -137,7 +206,7 @@ def plot_envelope(
     axes: tuple[Any, ...] = (plane,)
     if grid is not None:
         axes = (plane, *_draw_time_panel(figure.add_subplot(grid[0, 1]), curve, trajectories, lines))
-    name = title if title is not None else curve.envelope.name
+    name = title if title is not None else plain_text(curve.envelope.name)
     if name and ax is None:
         figure.suptitle(name)
     return EnvelopePlot(figure=figure, axes=axes, lines=lines, curve=curve)
@@ -249,7 +318,8 @@ def _draw_time_panel(
             traj.clock, traj.effort, style, color="#d62728", label=f"effort {label}"
         )
     first = trajectories[0]
-    limit = curve.envelope.effort_limit(first.velocity)
+    with np.errstate(over="ignore"):  # R*|v| beyond float range: a limit of 0, no warning
+        limit = curve.envelope.effort_limit(first.velocity)
     lines["limit"] = twin.plot(
         first.clock, limit, color="#d62728", linewidth=0.6, alpha=0.5, label="effort limit at v(t)"
     )
@@ -264,29 +334,47 @@ def _draw_time_panel(
     return axis, twin
 
 
-def save_figure(plot: EnvelopePlot | Any, path: str | os.PathLike[str], *, dpi: int = 120) -> None:
+def save_figure(
+    plot: EnvelopePlot | Any, path: str | os.PathLike[str], *, dpi: int = 120, force: bool = False
+) -> None:
     """Write the figure of ``plot`` (or a matplotlib figure) to ``path`` atomically.
 
     Args:
         plot: An :class:`EnvelopePlot` or a ``matplotlib.figure.Figure``.
         path: Output file; its suffix picks the format (``.png``, ``.svg``, ``.pdf``).
-        dpi: Resolution of raster output [dots per inch].
+        dpi: Resolution of raster output [dots per inch]; a PNG stays within
+            :data:`MAX_PIXELS_PER_SIDE` per side and :data:`MAX_PIXELS` in all.
+        force: Replace ``path`` even when it is read-only.
 
     Raises:
-        InputError: an unsupported suffix, a non-positive ``dpi``, or a file that cannot be written.
+        InputError: an unsupported suffix, a ``dpi`` that is not a positive integer or makes the
+            image too large, or a file that cannot be written.
     """
-    target = Path(path)
+    target = check_figure_path(path)
     suffix = target.suffix.lower()
-    if suffix not in FIGURE_SUFFIXES:
-        raise InputError(f"--output {str(target)!r}: expected a .png, .svg or .pdf file name")
-    if dpi <= 0:
-        raise InputError(f"--dpi: expected a positive integer, got {dpi!r}")
     figure = plot.figure if isinstance(plot, EnvelopePlot) else plot
+    _check_dpi(figure, dpi, raster=suffix == ".png")
     try:
-        with atomic_path(target) as tmp:
+        with atomic_path(target, force=force) as tmp:
             figure.savefig(tmp, format=suffix[1:], dpi=dpi, metadata=_metadata(suffix))
     except OSError as exc:  # a missing folder or no permission is the user's input, not a bug
         raise InputError(f"--output {str(target)!r}: cannot write: {exc.strerror or exc}") from None
+
+
+def _check_dpi(figure: Any, dpi: int, *, raster: bool) -> None:
+    """Refuse a ``dpi`` that is not a positive integer or would make a raster image too large."""
+    if isinstance(dpi, bool) or not isinstance(dpi, int) or dpi <= 0:
+        raise InputError(f"--dpi {dpi!r}: expected a positive integer")
+    if not raster:
+        return
+    width, height = (float(size) for size in figure.get_size_inches())
+    pixels_w, pixels_h = round(width * dpi), round(height * dpi)
+    if max(pixels_w, pixels_h) > MAX_PIXELS_PER_SIDE or pixels_w * pixels_h > MAX_PIXELS:
+        most = int(min(MAX_PIXELS_PER_SIDE / max(width, height), (MAX_PIXELS / (width * height)) ** 0.5))
+        raise InputError(
+            f"--dpi {dpi}: the {width:g} x {height:g} in figure would be {pixels_w} x {pixels_h} pixels; "
+            f"expected at most {MAX_PIXELS_PER_SIDE} per side and {MAX_PIXELS} in all (--dpi {most} or less)"
+        )
 
 
 def _metadata(suffix: str) -> dict[str, Any]:

@@ -14,7 +14,6 @@ one number). Without ``[envelope]`` the drive is clamped to ``+-max_effort`` (Ph
 
 from __future__ import annotations
 
-import copy
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -26,6 +25,8 @@ from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
+from drive_envelope._src.scenario.overrides import SECTIONS as _SECTIONS
+from drive_envelope._src.scenario.overrides import apply_overrides, parse_override
 from drive_envelope._src.units import to_si
 from drive_envelope._src.values import nearest_key, read_quantity
 
@@ -44,7 +45,6 @@ __all__ = [
 
 SolverType = Literal["pgs", "tgs"]
 
-_SECTIONS = ("joint", "drive", "envelope", "load", "simulation")
 _TOP_KEYS = ("name", "description", *_SECTIONS)
 _ENVELOPE_KEYS = (
     "datasheet",
@@ -53,6 +53,10 @@ _ENVELOPE_KEYS = (
     "speed_effort_gradient",
 )
 _MAX_ITERATIONS = 255  # PhysX stores solver iteration counts in 8 bits
+# PhysX steps in float32: a (sub)step below its smallest normal number, or above its largest, is
+# 0 or inf there, and the float64 reference would divide by a subnormal
+_MIN_STEP = 1.1754943508222875e-38
+_MAX_STEP = 3.4028234663852886e38
 
 
 def _unit(joint: str, revolute: str, prismatic: str) -> str:
@@ -130,9 +134,11 @@ class SimulationSpec:
     """Time stepping and the PhysX articulation solver settings."""
 
     dt: float = 1.0 / 60.0
-    """Time step [s]; ``> 0``."""
+    """Time step [s]; ``> 0``, and ``dt / position_iterations`` within float32's normal range
+    (1.2e-38 .. 3.4e38 s), as PhysX computes in float32."""
     duration: float = 1.0
-    """Simulated time [s]; ``>= 0``. The number of steps is ``round(duration / dt)``."""
+    """Simulated time [s]; ``>= 0``. The number of steps is ``round(duration / dt)``, a finite
+    number (the engines refuse more than their step limit, 10^8 by default)."""
     solver: SolverType = "tgs"
     """``"tgs"`` (PhysX's default through USD) or ``"pgs"``."""
     position_iterations: int = 4
@@ -147,6 +153,18 @@ class SimulationSpec:
             raise InputError(f"simulation.solver must be 'pgs' or 'tgs', got {self.solver!r}")
         _check_int("simulation.position_iterations", self.position_iterations, 1)
         _check_int("simulation.velocity_iterations", self.velocity_iterations, 0)
+        substep = self.dt / self.position_iterations
+        if not _MIN_STEP <= substep <= _MAX_STEP:
+            raise InputError(
+                f"simulation.dt must give a (sub)step within float32's range {_MIN_STEP:.2g} .. "
+                f"{_MAX_STEP:.2g} s (PhysX steps in float32), got dt = {self.dt!r} s with "
+                f"{self.position_iterations} position iteration(s)"
+            )
+        if not math.isfinite(self.duration / self.dt):
+            raise InputError(
+                f"simulation.duration / simulation.dt must be a finite number of steps, got "
+                f"{self.duration!r} s / {self.dt!r} s"
+            )
 
     @property
     def steps(self) -> int:
@@ -216,55 +234,6 @@ def _check_finite(name: str, value: float, *, positive: bool = False, nonnegativ
 def _check_int(name: str, value: int, low: int) -> None:
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= _MAX_ITERATIONS:
         raise InputError(f"{name} must be an integer in {low}..{_MAX_ITERATIONS}, got {value!r}")
-
-
-# -- overrides --------------------------------------------------------------------------------------
-
-
-def parse_override(text: str) -> tuple[str, str, object]:
-    """Split one ``--set section.key=value`` into ``(section, key, value)``.
-
-    The value is read as a TOML literal (``12``, ``1.5``, ``"pgs"``, ``true``); anything else is
-    kept as a plain string, so ``--set drive.target_velocity="30 rpm"`` and
-    ``--set simulation.solver=pgs`` both work.
-
-    Raises:
-        InputError: no ``=``, or a key that is not ``section.key``.
-    """
-    import tomllib
-
-    path, sep, raw = text.partition("=")
-    section, dot, key = path.strip().partition(".")
-    if not sep or not dot or not section or not key or "." in key:
-        raise InputError(f"--set {text!r}: expected section.key=value, e.g. drive.target_velocity=12")
-    raw = raw.strip()
-    try:
-        value: object = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw
-    return section, key, value
-
-
-def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
-    """Return a copy of the raw scenario mapping with ``--set section.key=value`` overrides applied.
-
-    Raises:
-        InputError: a malformed override or an unknown section (the key is checked later, with the
-            rest of the file).
-    """
-    result = copy.deepcopy(dict(data))
-    for text in overrides:
-        section, key, value = parse_override(text)
-        if section not in _SECTIONS:
-            raise InputError(
-                f"--set {text!r}: unknown section {section!r}{nearest_key(section, _SECTIONS)}; "
-                f"valid sections: {', '.join(_SECTIONS)}"
-            )
-        table = result.setdefault(section, {})
-        if not isinstance(table, dict):
-            raise InputError(f"--set {text!r}: [{section}] is not a table in the scenario file")
-        table[key] = value
-    return result
 
 
 # -- reading ----------------------------------------------------------------------------------------
@@ -429,6 +398,12 @@ def _read_envelope(
         "speed_effort_gradient": _unit(joint, "(rad/s)/(N*m)", "(m/s)/N"),
     }
     values: dict[str, Any] = _quantities(table, "envelope", units, source)
+    for key, value in values.items():  # checked here so the message names the key in the file
+        if value < 0.0 or (math.isinf(value) and key != "max_actuator_velocity"):
+            bound = (
+                "a number >= 0 (inf allowed)" if key == "max_actuator_velocity" else "a finite number >= 0"
+            )
+            raise InputError(f"{source}: key 'envelope.{key}': expected {bound}, got {table[key]!r}")
     if "datasheet" in table:
         base = _resolve_datasheet(table["datasheet"], source, base_dir)
         if base.joint != joint:

@@ -2,8 +2,11 @@
 
 Row 0 is the initial state (effort 0.0: no step has been taken yet); row ``i >= 1`` is the state
 at the end of step ``i`` and the step-average total actuator effort over that step (drive +
-applied joint effort, what PhysX reports). CSV files have the header ``time,position,velocity,effort``
-and are written atomically; JSON files hold the same columns plus the metadata.
+applied joint effort, what PhysX reports). Files: CSV with the header ``time,position,velocity,effort``,
+JSON with the same columns plus the metadata, or Parquet (needs pyarrow) with the metadata in the
+schema; the suffix picks the format (``.csv``/``.txt``/none, ``.json``, ``.parquet``/``.pq``). Files
+are written atomically and streamed in blocks, so memory does not grow with the text. Every value
+is finite: a NaN or inf in a trajectory, or in a file read as one, is an :class:`InputError`.
 """
 
 from __future__ import annotations
@@ -11,33 +14,51 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TextIO
 
 import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.io.atomic import atomic_write_text
+from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.io.files import read_text
 
 __all__ = [
     "COLUMNS",
+    "TRAJECTORY_FORMATS",
     "Trajectory",
+    "TrajectoryFormat",
     "read_trajectory",
     "save_trajectory",
+    "trajectory_format",
     "trajectory_to_csv",
     "trajectory_to_json",
+    "write_trajectory_csv",
+    "write_trajectory_json",
 ]
 
 COLUMNS = ("time", "position", "velocity", "effort")
 """CSV header, in order."""
+TrajectoryFormat = Literal["csv", "json", "parquet"]
+TRAJECTORY_FORMATS: tuple[TrajectoryFormat, ...] = ("csv", "json", "parquet")
+"""File formats of a trajectory."""
 
 FloatArray = npt.NDArray[np.float64]
+
+_SUFFIXES: dict[str, TrajectoryFormat] = {
+    ".csv": "csv",
+    ".txt": "csv",
+    "": "csv",
+    ".json": "json",
+    ".parquet": "parquet",
+    ".pq": "parquet",
+}
+_BLOCK_ROWS = 1 << 16  # rows formatted at a time when writing: the text never exists whole
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -77,6 +98,12 @@ class Trajectory:
                 f"trajectory columns have different lengths: { {k: v.shape[0] for k, v in arrays.items()} }"
             )
         for column, values in arrays.items():
+            if not np.isfinite(values).all():  # a diverged engine must never write a silent NaN
+                row = int(np.flatnonzero(~np.isfinite(values))[0])
+                raise InputError(
+                    f"trajectory {self.name or self.engine or ''!r}: column {column!r}, row {row} is "
+                    f"{float(values[row])!r}; expected finite numbers"
+                )
             object.__setattr__(self, column, values)
 
     def __len__(self) -> int:
@@ -89,75 +116,140 @@ class Trajectory:
             return {"time": "s", "position": "m", "velocity": "m/s", "effort": "N"}
         return {"time": "s", "position": "rad", "velocity": "rad/s", "effort": "N*m"}
 
+    def header(self) -> dict[str, Any]:
+        """Everything but the columns: engine, name, joint, units and metadata (JSON-compatible)."""
+        return {
+            "engine": self.engine,
+            "name": self.name,
+            "joint": self.joint,
+            "units": self.units,
+            "metadata": self.metadata,
+        }
 
-def _number(value: float) -> str:
-    # repr round-trips float64 exactly; CSV readers accept inf/nan spelled this way
-    return repr(float(value))
+
+def trajectory_format(path: str | os.PathLike[str], format: str | None = None) -> TrajectoryFormat:
+    """The format a trajectory file is written in: ``format`` if given, else the file's suffix.
+
+    Raises:
+        InputError: an unknown format, or a suffix that names none (``.xlsx``; give ``format``).
+    """
+    if format is not None:
+        if format not in TRAJECTORY_FORMATS:
+            raise InputError(f"--format {format!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")
+        return format  # type: ignore[return-value]
+    suffix = Path(path).suffix.lower()
+    if suffix not in _SUFFIXES:
+        raise InputError(
+            f"--output {str(path)!r}: unknown suffix {suffix!r}; expected .csv, .json or .parquet "
+            "(or name the format with --format)"
+        )
+    return _SUFFIXES[suffix]
+
+
+def _blocks(trajectory: Trajectory) -> Iterator[list[list[float]]]:
+    """The columns of ``trajectory`` as Python floats, :data:`_BLOCK_ROWS` rows at a time."""
+    columns = [getattr(trajectory, c) for c in COLUMNS]
+    for start in range(0, len(trajectory), _BLOCK_ROWS):
+        yield [column[start : start + _BLOCK_ROWS].tolist() for column in columns]
+
+
+def write_trajectory_csv(trajectory: Trajectory, handle: TextIO) -> None:
+    """Write CSV (header ``time,position,velocity,effort``) to ``handle``, block by block."""
+    handle.write(",".join(COLUMNS) + "\n")
+    for block in _blocks(trajectory):
+        # repr round-trips float64 exactly
+        handle.write("".join(f"{t!r},{q!r},{v!r},{e!r}\n" for t, q, v, e in zip(*block, strict=True)))
+
+
+def write_trajectory_json(trajectory: Trajectory, handle: TextIO) -> None:
+    """Write JSON (:meth:`Trajectory.header` keys, then one list per column) to ``handle``."""
+    handle.write("{\n")
+    for key, value in trajectory.header().items():
+        handle.write(f" {json.dumps(key)}: {json.dumps(value)},\n")
+    for index, column in enumerate(COLUMNS):
+        handle.write(f" {json.dumps(column)}: [")
+        values = getattr(trajectory, column)
+        for start in range(0, values.shape[0], _BLOCK_ROWS):
+            part = ",\n  ".join(repr(v) for v in values[start : start + _BLOCK_ROWS].tolist())
+            handle.write(("\n  " if start == 0 else ",\n  ") + part)
+        handle.write("\n ]" + (",\n" if index < len(COLUMNS) - 1 else "\n"))
+    handle.write("}\n")
 
 
 def trajectory_to_csv(trajectory: Trajectory) -> str:
     """CSV text with the header ``time,position,velocity,effort``, one row per sample."""
     buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    columns = [getattr(trajectory, c) for c in COLUMNS]
-    for row in zip(*columns, strict=True):
-        writer.writerow([_number(v) for v in row])
+    write_trajectory_csv(trajectory, buffer)
     return buffer.getvalue()
-
-
-def _json_float(value: float) -> float | str:
-    return value if math.isfinite(value) else repr(value)
 
 
 def trajectory_to_json(trajectory: Trajectory) -> str:
     """JSON text: ``{"engine", "name", "joint", "units", "metadata", "time": [...], ...}``."""
-    data: dict[str, Any] = {
-        "engine": trajectory.engine,
-        "name": trajectory.name,
-        "joint": trajectory.joint,
-        "units": trajectory.units,
-        "metadata": trajectory.metadata,
-    }
-    for column in COLUMNS:
-        data[column] = [_json_float(float(v)) for v in getattr(trajectory, column)]
-    return json.dumps(data, indent=1) + "\n"
+    buffer = io.StringIO()
+    write_trajectory_json(trajectory, buffer)
+    return buffer.getvalue()
 
 
 def save_trajectory(
     trajectory: Trajectory,
     path: str | os.PathLike[str],
     *,
-    format: Literal["csv", "json"] | None = None,
+    format: TrajectoryFormat | None = None,
+    force: bool = False,
 ) -> None:
-    """Write a trajectory atomically; the format follows the suffix (``.json``, else CSV) unless given.
+    """Write a trajectory atomically; the format follows the suffix (see :func:`trajectory_format`).
+
+    Args:
+        trajectory: The trajectory.
+        path: Output file.
+        format: ``"csv"``, ``"json"`` or ``"parquet"``; None: from the suffix.
+        force: Replace ``path`` even when it is read-only.
 
     Raises:
-        InputError: the file cannot be written (missing folder, no permission).
+        InputError: an unknown suffix, Parquet without pyarrow, or a file that cannot be written
+            (missing folder, no permission, a full disk).
     """
-    chosen = format or ("json" if Path(path).suffix.lower() == ".json" else "csv")
-    text = trajectory_to_json(trajectory) if chosen == "json" else trajectory_to_csv(trajectory)
-    try:
-        atomic_write_text(path, text)
-    except OSError as exc:  # a missing folder or no permission is the user's input, not a bug
-        raise InputError(f"--output {str(path)!r}: cannot write: {exc.strerror or exc}") from None
+    chosen = trajectory_format(path, format)
+    if chosen == "parquet":
+        from drive_envelope._src.scenario.trajectory_parquet import write_parquet
+
+        columns = {column: getattr(trajectory, column) for column in COLUMNS}
+        write_parquet(columns, trajectory.header(), path, force=force)
+        return
+    writer = write_trajectory_json if chosen == "json" else write_trajectory_csv
+    with atomic_path(path, force=force) as tmp, open(tmp, "w", encoding="utf-8", newline="") as handle:
+        writer(trajectory, handle)
 
 
 def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolute") -> Trajectory:
-    """Read a trajectory CSV (header ``time,position,velocity,effort``) or JSON file.
+    """Read a trajectory file: CSV (header ``time,position,velocity,effort``), JSON or Parquet.
 
-    An empty effort cell (row 0 of some writers) reads as 0.0.
+    An empty effort cell (row 0 of some writers) reads as 0.0; spaces around CSV column names are
+    ignored.
 
     Args:
         path: The file.
         joint: Joint type recorded in the result for a CSV file (CSV has no metadata).
 
     Raises:
-        InputError: missing file, missing column, or a cell that is not a number.
+        InputError: missing file, a missing or repeated column, or a cell that is not a finite number.
     """
     file = Path(path)
+    suffix = file.suffix.lower()
+    if _SUFFIXES.get(suffix) == "parquet":
+        from drive_envelope._src.scenario.trajectory_parquet import read_parquet
+
+        arrays, header = read_parquet(file, COLUMNS)
+        metadata = header.get("metadata")
+        return Trajectory(
+            joint=header["joint"],
+            engine=str(header.get("engine", "")),
+            name=str(header.get("name", "") or file.stem),
+            metadata=metadata if isinstance(metadata, dict) else {},
+            **arrays,
+        )
     text = read_text(file)
-    if file.suffix.lower() == ".json":
+    if suffix == ".json":
         return _from_json(text, file)
     return _from_csv(text, file, joint)
 
@@ -166,23 +258,37 @@ def _cell(value: str | None, where: str) -> float:
     if value is None or value.strip() == "":
         return 0.0
     try:
-        return float(value)
+        number = float(value)
     except ValueError:
         raise InputError(f"{where}: expected a number, got {value!r}") from None
+    if not np.isfinite(number):  # a plot would drop it without a word
+        raise InputError(f"{where}: got {value.strip()!r}; expected a finite number")
+    return number
 
 
 def _from_csv(text: str, file: Path, joint: JointType) -> Trajectory:
-    reader = csv.DictReader(io.StringIO(text))
-    header = reader.fieldnames or []
+    reader = csv.reader(io.StringIO(text))
+    try:
+        header = [name.strip() for name in next(reader, [])]
+        rows = list(reader)
+    except csv.Error as exc:  # a field over the csv module's limit
+        raise InputError(f"{file}: cannot read as CSV: {exc}") from None
+    repeated = sorted({name for name in header if name in COLUMNS and header.count(name) > 1})
+    if repeated:
+        raise InputError(f"{file}: column {repeated[0]!r} appears {header.count(repeated[0])} times")
     missing = [c for c in COLUMNS if c not in header]
     if missing:
         raise InputError(
             f"{file}: missing column(s) {', '.join(missing)}; expected header {','.join(COLUMNS)}"
         )
+    index = {column: header.index(column) for column in COLUMNS}
     columns: dict[str, list[float]] = {c: [] for c in COLUMNS}
-    for line, row in enumerate(reader, start=2):
+    for line, row in enumerate(rows, start=2):
+        if not row:
+            continue
         for column in COLUMNS:
-            columns[column].append(_cell(row.get(column), f"{file}: line {line}, column {column!r}"))
+            cell = row[index[column]] if index[column] < len(row) else None
+            columns[column].append(_cell(cell, f"{file}: line {line}, column {column!r}"))
     if not columns["time"]:
         raise InputError(f"{file}: no data rows")
     return Trajectory(
@@ -200,13 +306,20 @@ def _from_json(text: str, file: Path) -> Trajectory:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"{file}: malformed JSON: {exc}") from None
+    except RecursionError:
+        raise InputError(f"{file}: malformed JSON: nested too deeply") from None
     if not isinstance(data, dict):
         raise InputError(f"{file}: expected a JSON object with keys {', '.join(COLUMNS)}")
     arrays = {}
     for column in COLUMNS:
         if not isinstance(data.get(column), list):
             raise InputError(f"{file}: key {column!r}: expected a list of numbers")
-        arrays[column] = np.asarray([_cell(str(v), f"{file}: key {column!r}") for v in data[column]])
+        arrays[column] = np.asarray(
+            [_cell(str(v), f"{file}: key {column!r}, item {i}") for i, v in enumerate(data[column])]
+        )
+    if len({values.shape for values in arrays.values()}) != 1:
+        lengths = ", ".join(f"{c} {values.shape[0]}" for c, values in arrays.items())
+        raise InputError(f"{file}: the columns have different lengths ({lengths}); expected one per row")
     joint = data.get("joint", "revolute")
     if joint not in ("revolute", "prismatic"):
         raise InputError(f"{file}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")

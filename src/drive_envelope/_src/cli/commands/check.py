@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument
+from drive_envelope._src.cli.common import add_force_argument, add_format_argument, fraction, integer_at_least
 
 
 def register(subparsers: Any) -> None:
@@ -31,24 +31,31 @@ def register(subparsers: Any) -> None:
     add_column_arguments(parser)
     parser.add_argument(
         "--tolerance",
-        type=float,
+        type=fraction,
         default=0.0,
         metavar="F",
         help="largest fraction of samples allowed outside per joint (default 0)",
     )
     parser.add_argument(
         "--slack",
-        type=float,
+        type=fraction,
         default=1e-6,
         metavar="F",
         help="a margin below -F times the curve's cap counts as outside (default 1e-6: rounding in logs)",
     )
     parser.add_argument(
         "--limit-band",
-        type=float,
+        type=fraction,
         default=0.01,
         metavar="F",
         help="|margin| <= F times the cap counts as on the limit (default 0.01)",
+    )
+    parser.add_argument(
+        "--max-joints",
+        type=integer_at_least(1),
+        default=1000,
+        metavar="N",
+        help="most distinct joint names in the log (default 1000; memory grows ~32 KiB per joint)",
     )
     add_format_argument(parser, ("text", "json"), "the report as text or as one JSON object (SI)")
     parser.add_argument(
@@ -57,6 +64,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="also write the envelope plot with violations in red (.png/.svg/.pdf; one file per joint)",
     )
+    add_force_argument(parser)
     parser.set_defaults(func=_run)
 
 
@@ -68,17 +76,20 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_check, plot_check
     from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.plots.figure import check_figure_path
 
-    checked_output(args.plot, "--plot")
+    if checked_output(args.plot, "--plot") is not None:
+        check_figure_path(args.plot, "--plot")  # before the check, which may read a large log
     options = CheckOptions(
         tolerance=args.tolerance,
         slack=args.slack,
         limit_band=args.limit_band,
         keep_points=20000 if args.plot else 0,
+        max_joints=args.max_joints,
     )
     report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
     if args.plot:
-        written = plot_check(report, args.plot)
+        written = plot_check(report, args.plot, force=args.force)
     if args.format == "json":
         print(json.dumps(report.to_dict(), indent=2))
     else:

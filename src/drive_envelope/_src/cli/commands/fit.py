@@ -3,9 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument, add_output_argument
+from drive_envelope._src.cli.common import (
+    add_force_argument,
+    add_format_argument,
+    add_output_argument,
+    integer_at_least,
+)
 
 
 def register(subparsers: Any) -> None:
@@ -42,21 +48,39 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--outlier-quantile",
-        type=float,
+        type=_quantile,
         default=0.0,
         metavar="Q",
         help="fraction of samples allowed outside (default 0: contain all; 0.5: central line through noise)",
     )
     parser.add_argument(
-        "--bootstrap", type=int, default=200, metavar="N", help="bootstrap resamples (default 200)"
+        "--bootstrap",
+        type=integer_at_least(0, 10_000),
+        default=200,
+        metavar="N",
+        help="bootstrap resamples, 0..10000 (default 200)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
+    parser.add_argument(
+        "--seed", type=integer_at_least(0), default=0, help="random seed of the bootstrap, >= 0 (default 0)"
+    )
     parser.add_argument("--select", metavar="JOINT", default=None, help="joint to fit in a long-format log")
     parser.add_argument("--name", default="", help="name written into the envelope file")
     add_output_argument(parser, "write the fitted envelope file here (.toml or .json), atomically")
+    add_force_argument(parser)
     add_format_argument(parser, ("text", "json"), "the fit as a table or as one JSON object (SI)")
     add_column_arguments(parser, time=False)
     parser.set_defaults(func=_run)
+
+
+def _quantile(text: str) -> float:
+    """Argument type of ``--outlier-quantile``: a number in [0, 0.5]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 <= value <= 0.5:
+        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 0.5], got {text!r}")
+    return value
 
 
 def _fixed(items: list[str], joint: str) -> dict[str, float]:
@@ -97,9 +121,12 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_fit
     from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.errors import InputError
     from drive_envelope._src.io.envelope_file import save_envelope
 
     output = checked_output(args.output)
+    if output is not None and Path(output).suffix.lower() not in (".toml", ".json"):
+        raise InputError(f"--output {output!r}: expected an envelope file name ending in .toml or .json")
     options = FitOptions(
         joint=args.joint,
         outlier_quantile=args.outlier_quantile,
@@ -114,7 +141,7 @@ def _run(args: argparse.Namespace) -> int:
     else:
         result = fit_log(args.log, columns=columns, options=options, select=args.select)
     if output is not None:
-        save_envelope(result.envelope, output)
+        save_envelope(result.envelope, output, force=args.force)
     if args.format == "json":
         print(json.dumps(result.to_dict(), indent=2))
     else:

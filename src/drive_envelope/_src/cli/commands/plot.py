@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_output_argument
+from drive_envelope._src.cli.common import add_force_argument, add_output_argument, integer_at_least
 
 
 def register(subparsers: Any) -> None:
@@ -33,31 +33,59 @@ def register(subparsers: Any) -> None:
         help="a trajectory written by `drive-envelope simulate` (CSV or JSON); repeat for several",
     )
     add_output_argument(parser, "figure file: .png, .svg or .pdf", required=True, metavar="FIG")
-    parser.add_argument("--title", default=None, help="figure title (default: the envelope's name)")
-    parser.add_argument("--dpi", type=int, default=120, help="resolution of raster output (default 120)")
+    parser.add_argument(
+        "--title",
+        default=None,
+        help="figure title, may use matplotlib mathtext (default: the envelope's name)",
+    )
+    parser.add_argument(
+        "--dpi", type=integer_at_least(1), default=120, help="resolution of raster output (default 120)"
+    )
+    add_force_argument(parser)
     parser.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.cli.common import checked_output, status
     from drive_envelope._src.plots.curve import OperatingPoints
-    from drive_envelope._src.plots.figure import plot_envelope, save_figure
+    from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
     from drive_envelope._src.scenario.trajectory import read_trajectory
 
     output = checked_output(args.output)
     assert output is not None  # required
+    check_figure_path(output)
     envelope = envelope_from_argument(args.envelope)
+    _check_plottable(envelope, args.envelope)
     points = []
     for path in args.trajectory:
         trajectory = read_trajectory(path, joint=envelope.joint)
         label = f"{trajectory.name} ({trajectory.engine})" if trajectory.engine else trajectory.name
         points.append(
             OperatingPoints(
-                velocity=trajectory.velocity, effort=trajectory.effort, time=trajectory.time, label=label
+                velocity=trajectory.velocity,
+                effort=trajectory.effort,
+                time=trajectory.time,
+                label=plain_text(label),  # a name from a file is text, never mathtext
             )
         )
-    handle = plot_envelope(envelope, points=points or None, title=args.title)
-    save_figure(handle, output, dpi=args.dpi)
+    handle = plot_envelope(envelope, points=points or None, title=_title(args.title))
+    save_figure(handle, output, dpi=args.dpi, force=args.force)
     status(f"wrote {output}")
     return 0
+
+
+def _title(title: str | None) -> str | None:
+    from drive_envelope._src.plots.figure import check_text
+
+    return None if title is None else check_text(title, "--title")
+
+
+def _check_plottable(envelope: Any, spec: str) -> None:
+    from drive_envelope._src.errors import InputError
+    from drive_envelope._src.plots.curve import envelope_curve
+
+    try:
+        envelope_curve(envelope)
+    except InputError as exc:  # values that no window shows to scale: name the file they came from
+        raise InputError(f"{spec}: {exc}") from None

@@ -6,19 +6,21 @@ import argparse
 import sys
 from typing import Any
 
-from drive_envelope._src.cli.common import add_output_argument
+from drive_envelope._src.cli.common import add_force_argument, add_output_argument, integer_at_least
 
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` command."""
-    from drive_envelope._src.teststand.engines import ENGINES
+    from drive_envelope._src.teststand.engines import ENGINES, MAX_STEPS
 
     parser = subparsers.add_parser(
         "simulate",
         help="simulate one actuated joint with the PhysX drive and envelope",
         description=(
             "Run a test-stand scenario (one joint, fixed base, rigid inertia) and write time, position, "
-            "velocity and the step-average total actuator effort (SI) as CSV or JSON."
+            "velocity and the step-average total actuator effort (SI) as CSV, JSON or Parquet. A run of "
+            "more than --max-steps steps is refused before it starts; long runs show their progress on "
+            "stderr when it is a terminal."
         ),
     )
     parser.add_argument("file", metavar="FILE", help="scenario file (TOML, JSON or YAML)")
@@ -28,9 +30,16 @@ def register(subparsers: Any) -> None:
         default="reference",
         help="reference (float64 model of the PhysX solver, default), mujoco, physx (real PhysX via ovphysx)",
     )
-    add_output_argument(parser, "trajectory file, atomically; '-' or absent: stdout", metavar="OUT")
+    add_output_argument(
+        parser, "trajectory file (.csv, .json, .parquet), atomically; '-' or absent: stdout", metavar="OUT"
+    )
     parser.add_argument(
-        "--format", choices=("csv", "json"), help="output format (default: from the suffix, else csv)"
+        "--format",
+        choices=("csv", "json", "parquet"),
+        help="output format (default: from the suffix, else csv; parquet needs a file and pyarrow)",
+    )
+    parser.add_argument(
+        "--json", dest="format", action="store_const", const="json", help="short for --format json"
     )
     parser.add_argument(
         "--set",
@@ -40,30 +49,69 @@ def register(subparsers: Any) -> None:
         metavar="SECTION.KEY=VALUE",
         help="override a scenario value, e.g. --set drive.target_velocity=12 (repeatable)",
     )
+    parser.add_argument(
+        "--max-steps",
+        type=integer_at_least(1),
+        default=MAX_STEPS,
+        metavar="N",
+        help=f"refuse runs of more than N time steps (default {MAX_STEPS:.0e}; ~32 bytes per step)",
+    )
+    add_force_argument(parser)
     parser.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.cli.common import Progress, checked_output, status
+    from drive_envelope._src.errors import InputError
     from drive_envelope._src.scenario.spec import load_scenario
     from drive_envelope._src.scenario.trajectory import (
         save_trajectory,
-        trajectory_to_csv,
-        trajectory_to_json,
+        write_trajectory_csv,
+        write_trajectory_json,
     )
-    from drive_envelope._src.teststand.engines import simulate
+    from drive_envelope._src.teststand.engines import check_steps, engine_module, simulate
 
+    to_stdout = args.output in (None, "-")
+    output = None if to_stdout else checked_output(args.output)
+    chosen = _output_format(args.format, output)  # before the run: a bad output wastes no simulation
     scenario = load_scenario(args.file, args.overrides)
-    trajectory = simulate(scenario, args.engine)
-    if args.output in (None, "-"):
-        text = trajectory_to_json(trajectory) if args.format == "json" else trajectory_to_csv(trajectory)
-        sys.stdout.write(text)
+    try:
+        check_steps(scenario, args.max_steps)
+    except InputError as exc:
+        raise InputError(f"{args.file}: {exc}") from None
+    engine_module(args.engine)  # a missing extra is reported as such, not as a problem of the file
+    progress = Progress(f"simulate {args.engine}")
+    try:
+        trajectory = simulate(scenario, args.engine, max_steps=args.max_steps, progress=progress)
+    except InputError as exc:  # the run failed on this file's values: say which file
+        raise InputError(f"{args.file}: {exc}") from None
+    finally:
+        progress.close()
+    if output is None:
+        writer = write_trajectory_json if chosen == "json" else write_trajectory_csv
+        writer(trajectory, sys.stdout)
         return 0
-    output = checked_output(args.output)
-    assert output is not None
-    save_trajectory(trajectory, output, format=args.format)
+    save_trajectory(trajectory, output, format=chosen, force=args.force)
     status(_summary(trajectory, output))
     return 0
+
+
+def _output_format(format: str | None, output: str | None) -> Any:
+    from drive_envelope._src.errors import InputError
+    from drive_envelope._src.scenario.trajectory import trajectory_format
+    from drive_envelope._src.scenario.trajectory_parquet import have_parquet
+
+    if output is None:
+        if format == "parquet":
+            raise InputError("--format parquet: Parquet is binary; give a file with --output run.parquet")
+        return format or "csv"
+    chosen = trajectory_format(output, format)
+    if chosen == "parquet" and not have_parquet():
+        raise InputError(
+            f"--output {output!r}: Parquet needs pyarrow (pip install 'drive-envelope[parquet]'); "
+            "or write .csv or .json"
+        )
+    return chosen
 
 
 def _summary(trajectory: Any, output: str) -> str:

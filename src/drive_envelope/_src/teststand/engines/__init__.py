@@ -1,15 +1,21 @@
 """Test-stand engines: each maps a :class:`Scenario` to a :class:`Trajectory`.
 
-An engine is a module exposing ``simulate(scenario: Scenario) -> Trajectory``. Modules are
-imported only when the engine is used, and each imports its simulator inside its functions, so the
-registry itself is light. A missing optional package gives one :class:`InputError` line naming the
-extra to install.
+An engine is a module exposing ``simulate(scenario: Scenario) -> Trajectory``; one that also takes
+a keyword ``progress`` (a callable ``progress(done, total)`` it calls now and then with the steps
+done) gets the command line's progress bar. Modules are imported only when the engine is used, and
+each imports its simulator inside its functions, so the registry itself is light. A missing
+optional package gives one :class:`InputError` line naming the extra to install.
+
+Every run is bounded: :func:`simulate` refuses a scenario of more than ``max_steps`` steps
+(:data:`MAX_STEPS` unless raised) before any engine allocates its arrays (about 32 bytes a step).
 """
 
 from __future__ import annotations
 
 import importlib
 import importlib.util
+import inspect
+from collections.abc import Callable
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -19,12 +25,28 @@ if TYPE_CHECKING:
     from drive_envelope._src.scenario.spec import Scenario
     from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["ENGINES", "ENGINE_EXTRAS", "engine_module", "engine_names", "simulate"]
+__all__ = [
+    "ENGINES",
+    "ENGINE_EXTRAS",
+    "MAX_STEPS",
+    "ProgressCallback",
+    "check_steps",
+    "engine_module",
+    "engine_names",
+    "simulate",
+]
+
+MAX_STEPS = 10**8
+"""Most time steps one run takes unless ``max_steps`` (``--max-steps``) raises it: 3.2 GB of trajectory."""
+
+ProgressCallback = Callable[[int, int], None]
+"""``progress(done, total)``: called by an engine with the number of steps done so far."""
 
 ENGINES: dict[str, str] = {
     "reference": "drive_envelope._src.teststand.engines.reference",
     "mujoco": "drive_envelope._src.teststand.engines.mujoco",
     "physx": "drive_envelope._src.teststand.engines.physx",
+    "newton": "drive_envelope._src.teststand.engines.newton",
 }
 """Engine name -> module path."""
 
@@ -32,6 +54,7 @@ ENGINE_EXTRAS: dict[str, tuple[str, tuple[str, ...]]] = {
     "reference": ("", ()),
     "mujoco": ("mujoco", ("mujoco",)),
     "physx": ("physx", ("ovphysx", "ovstage", "pxr", "physx_usd_schemas")),
+    "newton": ("newton", ("newton", "warp")),
 }
 """Engine name -> (pip extra, top-level packages it needs)."""
 
@@ -69,20 +92,51 @@ def engine_module(name: str) -> ModuleType:
         raise _missing_extra(name, (exc.name or "?").split(".")[0]) from None
 
 
-def simulate(scenario: Scenario, engine: str = "reference") -> Trajectory:
+def check_steps(scenario: Scenario, max_steps: int = MAX_STEPS) -> int:
+    """The number of steps of ``scenario``, refused above ``max_steps``.
+
+    Raises:
+        InputError: more than ``max_steps`` steps, or a ``max_steps`` that is not an integer >= 1.
+    """
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
+        raise InputError(f"--max-steps: expected an integer >= 1, got {max_steps!r}")
+    sim = scenario.simulation
+    steps = sim.steps
+    if steps > max_steps:
+        raise InputError(
+            f"simulation.duration / simulation.dt = {sim.duration:g} s / {sim.dt:g} s = {steps:.4g} steps; "
+            f"expected at most {max_steps} (raise the limit with --max-steps; a run keeps about 32 bytes "
+            "per step)"
+        )
+    return steps
+
+
+def simulate(
+    scenario: Scenario,
+    engine: str = "reference",
+    *,
+    max_steps: int = MAX_STEPS,
+    progress: ProgressCallback | None = None,
+) -> Trajectory:
     """Run ``scenario`` on ``engine`` and return its trajectory.
 
     Args:
         scenario: The validated scenario (SI).
         engine: A name from :data:`ENGINES`.
+        max_steps: Most steps allowed (the run is refused before it starts above it).
+        progress: Called as ``progress(done, total)`` during the run by engines that support it.
 
     Raises:
-        InputError: unknown or unavailable engine (naming the extra to install), or a scenario the
-            engine cannot represent.
+        InputError: more than ``max_steps`` steps, an unknown or unavailable engine (naming the
+            extra to install), or a scenario the engine cannot represent.
     """
+    check_steps(scenario, max_steps)
     module = engine_module(engine)
+    options = {}
+    if progress is not None and "progress" in inspect.signature(module.simulate).parameters:
+        options["progress"] = progress
     try:
-        result: Trajectory = module.simulate(scenario)
+        result: Trajectory = module.simulate(scenario, **options)
     except ModuleNotFoundError as exc:
         # engines import their simulator lazily: a missing package surfaces on the first call
         raise _missing_extra(engine, (exc.name or "?").split(".")[0]) from None

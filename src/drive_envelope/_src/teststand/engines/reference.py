@@ -20,13 +20,16 @@ single joint on a fixed base (``physx/source/lowleveldynamics``):
   drive request.
 
 Response ``r = 1/inertia`` (one link on a fixed base). Everything is float64; PhysX computes in
-float32, so results agree to float32 precision, not bit for bit.
+float32, so results agree to float32 precision, not bit for bit. A drive law, drive request or state
+that overflows float64 (absurd gains, loads or inertias) stops the run with one :class:`InputError`
+line naming the time: a clamp fed an infinite request would otherwise give a finite, wrong effort.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -45,6 +48,12 @@ __all__ = [
     "simulate",
     "step",
 ]
+
+_PROGRESS_EVERY = 4096  # steps between progress reports
+
+
+class _Overflow(ArithmeticError):
+    """A drive quantity overflowed float64 (the message names which)."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -195,6 +204,8 @@ def _solve_drive(
         request = applied0  # TGS velocity iterations only re-clamp what the substeps applied
     else:
         request = compute_drive_impulse(desc, applied0, velocity, delta_position, elapsed)
+        if not math.isfinite(request):
+            raise _Overflow("the drive's impulse request")
     external = setup.scenario.load.applied_effort * timestep
     clamped = _clamp_total(setup, velocity, applied0, request, external, timestep)
     delta = clamped - applied0
@@ -203,7 +214,7 @@ def _solve_drive(
 
 def _desc(setup: _Setup, position: float, dt: float, sim_dt: float, is_tgs: bool) -> ImplicitDriveDesc:
     drive = setup.scenario.drive
-    return implicit_drive_desc(
+    desc = implicit_drive_desc(
         drive_type=drive.type,
         stiffness=drive.stiffness,
         damping=drive.damping,
@@ -214,6 +225,9 @@ def _desc(setup: _Setup, position: float, dt: float, sim_dt: float, is_tgs: bool
         target_velocity=drive.target_velocity,
         is_tgs=is_tgs,
     )
+    if not all(math.isfinite(getattr(desc, f.name)) for f in fields(desc)):
+        raise _Overflow("the implicit drive law (drive.stiffness, drive.damping and the targets)")
+    return desc
 
 
 def _pgs_step(setup: _Setup, position: float, velocity: float) -> JointState:
@@ -288,17 +302,55 @@ def step(scenario: Scenario, position: float, velocity: float) -> JointState:
 
     Returns:
         The state at the end of the step and the step's total actuator effort.
+
+    Raises:
+        InputError: a drive quantity or the state overflows float64.
     """
     setup = _setup(scenario)
     advance = _tgs_step if scenario.simulation.solver == "tgs" else _pgs_step
-    return advance(setup, float(position), float(velocity))
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the state is checked finite
+        return _advance(scenario, setup, advance, float(position), float(velocity), 0.0)
 
 
-def simulate(scenario: Scenario) -> Trajectory:
+def _advance(
+    scenario: Scenario,
+    setup: _Setup,
+    advance: Callable[[_Setup, float, float], JointState],
+    position: float,
+    velocity: float,
+    time: float,
+) -> JointState:
+    """One step, with every overflow turned into one line naming the time [s]."""
+    try:
+        state = advance(setup, position, velocity)
+    except (_Overflow, ZeroDivisionError, OverflowError) as exc:
+        what = str(exc) if isinstance(exc, _Overflow) else "a drive quantity"
+        raise _overflow_error(scenario, what, time) from None
+    # the implicit drive is unconditionally stable: only absurd inputs overflow float64
+    if not all(math.isfinite(value) for value in (state.position, state.velocity, state.effort)):
+        raise _overflow_error(scenario, "the joint state (position, velocity, effort)", time)
+    return state
+
+
+def _overflow_error(scenario: Scenario, what: str, time: float) -> InputError:
+    return InputError(
+        f"scenario {scenario.name or ''!r}: {what} overflowed float64 in the step from t = {time:g} s; "
+        "expected values whose products stay finite (check joint.inertia, the drive gains, targets and loads)"
+    )
+
+
+def simulate(scenario: Scenario, *, progress: Callable[[int, int], None] | None = None) -> Trajectory:
     """Run the whole scenario with the reference model.
+
+    Args:
+        scenario: The scenario.
+        progress: Called as ``progress(done, total)`` every few thousand steps and at the end.
 
     Returns:
         ``steps + 1`` rows: the initial state (effort 0) and the state after each step.
+
+    Raises:
+        InputError: a drive quantity or the state overflows float64.
     """
     setup = _setup(scenario)
     sim = scenario.simulation
@@ -309,12 +361,15 @@ def simulate(scenario: Scenario) -> Trajectory:
     velocity = np.empty(count + 1)
     effort = np.zeros(count + 1)
     position[0], velocity[0] = scenario.joint.initial_position, scenario.joint.initial_velocity
-    for i in range(count):
-        state = advance(setup, float(position[i]), float(velocity[i]))
-        position[i + 1], velocity[i + 1], effort[i + 1] = state.position, state.velocity, state.effort
-        if not (math.isfinite(state.position) and math.isfinite(state.velocity)):
-            # the implicit drive is unconditionally stable: only absurd inputs overflow float64
-            raise InputError(f"{scenario.name or 'scenario'}: the state overflowed at t = {time[i + 1]:g} s")
+    # every state is checked finite, so NumPy's overflow warnings would only repeat the error
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for i in range(count):
+            state = _advance(scenario, setup, advance, float(position[i]), float(velocity[i]), float(time[i]))
+            position[i + 1], velocity[i + 1], effort[i + 1] = state.position, state.velocity, state.effort
+            if progress is not None and (i + 1) % _PROGRESS_EVERY == 0:
+                progress(i + 1, count)
+    if progress is not None:
+        progress(count, count)
     return Trajectory(
         time=time,
         position=position,

@@ -1,0 +1,218 @@
+"""CSV logs (``.csv``, ``.tsv``, ``.txt``, each optionally ``.gz``), read in bounded-memory chunks.
+
+Two readers give the same chunks: pyarrow's streaming reader (fast, when installed) and the
+standard library's ``csv`` module. Leading ``#`` comment lines and blank lines are skipped; the
+header is read here once, so both readers agree on the column names (spaces around names removed)
+and on the rules of :class:`~drive_envelope._src.analysis.log_model.ColumnPlan`. A damaged file (a
+truncated ``.gz``, bytes that are not UTF-8, a field over :data:`FIELD_LIMIT` characters) is an
+:class:`InputError` naming the file, and the row where one is known.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import io
+import itertools
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drive_envelope._src.analysis.log_arrow import arrow_joint
+from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
+from drive_envelope._src.errors import InputError
+
+__all__ = ["FIELD_LIMIT", "iter_csv_arrow", "iter_csv_python"]
+
+FIELD_LIMIT = csv.field_size_limit()
+"""Longest field the standard library reads [characters] (131072): a longer one is an error."""
+
+_LINE_LIMIT = 1 << 20  # longest comment or header line read [characters]: memory stays bounded
+_READ_ERRORS = (OSError, EOFError, UnicodeDecodeError, zlib.error, csv.Error)  # a damaged or truncated file
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _open_text(path: Path) -> io.TextIOBase:
+    if path.suffix.lower() == ".gz":
+        return io.TextIOWrapper(gzip.open(path, "rb"), encoding="utf-8-sig", newline="")
+    return open(path, encoding="utf-8-sig", newline="")  # the caller closes it (with-block); -sig: skip a BOM
+
+
+def _header_line(handle: io.TextIOBase, label: str) -> tuple[int, str]:
+    """Return (lines before the header, the header line); comment and blank lines are skipped."""
+    skip = 0
+    while True:
+        line = handle.readline(_LINE_LIMIT + 1)
+        if not line:
+            raise InputError(
+                f"{label}: empty file (expected a header line naming the columns, then rows of numbers)"
+            )
+        if len(line) > _LINE_LIMIT:
+            raise InputError(
+                f"{label}: line {skip + 1} is longer than {_LINE_LIMIT} characters; "
+                "expected a header line naming the columns"
+            )
+        stripped = line.strip()
+        if stripped and not stripped.startswith("#"):
+            return skip, stripped
+        skip += 1
+
+
+def csv_header(path: Path, label: str) -> tuple[int, list[str], str]:
+    """Return (lines before the header, header names, delimiter) of a CSV log.
+
+    Raises:
+        InputError: an empty or unreadable file, or a header field over :data:`FIELD_LIMIT` characters.
+    """
+    try:
+        with _open_text(path) as handle:
+            skip, line = _header_line(handle, label)
+    except _READ_ERRORS as exc:
+        raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+    delimiter = max((",", ";", "\t"), key=line.count)
+    try:
+        header = next(csv.reader([line], delimiter=delimiter))
+    except csv.Error as exc:  # a field over FIELD_LIMIT characters
+        raise InputError(
+            f"{label}: line {skip + 1} (the header): {_one_line(exc)}; expected column names"
+        ) from None
+    return skip, [name.strip() for name in header], delimiter
+
+
+def iter_csv_arrow(path: Path, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
+    """Chunks of a CSV log read by pyarrow's streaming reader."""
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    skip, header, delimiter = csv_header(path, label)
+    plan = ColumnPlan(header, columns, label)
+    # columns go by position (names "0", "1", ...): the header was read above, so spaces around names
+    # and names pyarrow would refuse (duplicates of columns not read) do not matter
+    key = {role: str(position) for role, position in plan.position.items()}
+    types: dict[str, Any] = {key[role]: pa.float64() for role in plan.numeric}
+    if plan.joint:
+        types[key["joint"]] = pa.dictionary(pa.int32(), pa.string())
+    # pyarrow reads about 35 blocks ahead of the consumer: 1 MiB blocks bound that to ~35 MiB
+    # whatever the file size (larger blocks parse no faster); batches are cut to chunk_rows below
+    read = pacsv.ReadOptions(
+        skip_rows=skip + 1, column_names=[str(i) for i in range(len(header))], block_size=1 << 20
+    )
+    codes = JointCodes()
+    row = 1  # first row of the pending blocks
+    pending: list[dict[str, Any]] = []
+    try:
+        reader = pacsv.open_csv(
+            path,
+            read_options=read,
+            parse_options=pacsv.ParseOptions(delimiter=delimiter),
+            convert_options=pacsv.ConvertOptions(include_columns=list(types), column_types=types),
+        )
+        for batch in reader:
+            block = {role: batch.column(key[role]).to_numpy(zero_copy_only=False) for role in plan.numeric}
+            if plan.joint:
+                start = row + sum(len(part["velocity"]) for part in pending)
+                block["joint"] = arrow_joint(batch.column(key["joint"]), codes, plan, start)
+            pending.append(block)
+            # blocks are sized in bytes (~25k rows): gather them into chunks of chunk_rows rows, so
+            # the per-chunk work (one pass per joint) does not repeat for every small block
+            while sum(len(part["velocity"]) for part in pending) >= chunk_rows:
+                chunk, pending = _take(pending, chunk_rows)
+                yield _chunk(plan, chunk, codes, row)
+                row += chunk_rows
+        if pending:
+            chunk, pending = _take(pending, sum(len(part["velocity"]) for part in pending))
+            yield _chunk(plan, chunk, codes, row)
+    except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
+        # pyarrow's message has no reliable row number: rescan with the standard library for one
+        for _ in iter_csv_python(path, columns, chunk_rows, label):
+            pass
+        raise InputError(f"{label}: cannot read as CSV: {_one_line(exc)}") from None
+    except (OSError, pa.ArrowException) as exc:  # a truncated .gz, an I/O error
+        raise InputError(f"{label}: cannot read near row {row}: {_one_line(exc)}") from None
+
+
+def _take(parts: list[dict[str, Any]], rows: int) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The first ``rows`` rows of ``parts`` (blocks of column arrays) joined, and the rest."""
+    whole = {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+    head = {name: values[:rows] for name, values in whole.items()}
+    rest = {name: values[rows:] for name, values in whole.items()}
+    return head, ([rest] if len(rest["velocity"]) else [])
+
+
+def _chunk(plan: ColumnPlan, columns: dict[str, Any], codes: JointCodes, row: int) -> LogChunk:
+    arrays = {role: columns[role] for role in plan.numeric}
+    return make_chunk(plan, arrays, columns.get("joint"), codes, row)
+
+
+def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
+    """Chunks of a CSV log read by the standard library's ``csv`` module."""
+    skip, header, delimiter = csv_header(path, label)
+    plan = ColumnPlan(header, columns, label)
+    width = max(plan.position.values()) + 1
+    codes = JointCodes()
+    row = 1
+    with _open_text(path) as handle:
+        try:
+            for _ in range(skip + 1):
+                handle.readline()
+        except _READ_ERRORS as exc:
+            raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+        reader = csv.reader(handle, delimiter=delimiter)
+        while True:
+            try:
+                block = [fields for fields in itertools.islice(reader, chunk_rows) if fields]
+            except _READ_ERRORS as exc:
+                raise InputError(f"{label}: cannot read near row {row}: {_one_line(exc)}") from None
+            if not block:
+                return
+            for offset, fields in enumerate(block):
+                if len(fields) < width:
+                    raise InputError(
+                        f"{label}: row {row + offset}: {len(fields)} fields, the header has {len(header)} "
+                        f"({', '.join(header)})"
+                    )
+            arrays = _parse_block(block, plan, row)
+            joint = None
+            if plan.joint:
+                column = plan.position["joint"]
+                names, inverse = np.unique([fields[column].strip() for fields in block], return_inverse=True)
+                joint = codes.encode(list(names), inverse)
+            yield make_chunk(plan, arrays, joint, codes, row)
+            row += len(block)
+
+
+def _parse_floats(block: list[list[str]], column: int) -> tuple[Any, tuple[int, str] | None]:
+    """Column ``column`` of ``block`` as floats, and (offset, cell) of the first unreadable cell."""
+    cells = [fields[column] for fields in block]
+    try:
+        return np.array(cells, dtype=np.float64), None
+    except ValueError:
+        for offset, cell in enumerate(cells):
+            try:
+                float(cell)
+            except ValueError:
+                return np.zeros(0), (offset, cell)
+        raise
+
+
+def _parse_block(block: list[list[str]], plan: ColumnPlan, first_row: int) -> dict[str, Any]:
+    """The numeric columns of a block of CSV rows; an unreadable cell raises, naming the earliest."""
+    arrays: dict[str, Any] = {}
+    bad: list[tuple[int, str, str]] = []
+    for role in plan.numeric:
+        arrays[role], problem = _parse_floats(block, plan.position[role])
+        if problem is not None:
+            bad.append((problem[0], plan.name(role), problem[1]))
+    if bad:
+        offset, name, cell = min(bad)
+        what = "an empty cell" if not cell.strip() else repr(cell)
+        raise InputError(
+            f"{plan.label}: row {first_row + offset}, column {name!r}: got {what}; expected a number"
+        )
+    return arrays
