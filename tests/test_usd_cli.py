@@ -161,7 +161,7 @@ def test_read_only_asset_is_refused_unless_forced(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--joint", "/Robot/joints/nope", "--envelope", ENVELOPE, "-o", "OUT"], "no such prim"),
+        (["--joint", "/Robot/joints/nope", "--envelope", ENVELOPE, "-o", "OUT"], "no such prim in /"),
         (
             ["--joint", "/Robot/joints/slide", "--envelope", ENVELOPE, "-o", "OUT"],
             "envelope is for a revolute joint",

@@ -121,7 +121,8 @@ class PerformanceEnvelope:
 
     def _effort_limit_of_speed(self, speed: FloatArray) -> FloatArray:
         """:meth:`effort_limit` of ``speed = |velocity|``, reusing ``speed``'s memory (hot path)."""
-        limit = np.multiply(speed, -self.velocity_dependent_resistance, out=np.empty_like(speed))
+        with np.errstate(over="ignore"):  # R*|v| beyond float range: -inf, then no effort (0)
+            limit = np.multiply(speed, -self.velocity_dependent_resistance, out=np.empty_like(speed))
         limit += self.max_effort
         if self.speed_effort_gradient > 0.0:
             eq2 = np.subtract(self.max_actuator_velocity, speed, out=speed)
@@ -346,13 +347,23 @@ def _clip_polygon(
 
 
 def _dedupe(points: FloatArray) -> FloatArray:
-    """Drop consecutive (and wrap-around) duplicate vertices."""
+    """Drop consecutive (and wrap-around) duplicate vertices.
+
+    "Duplicate" is relative to the polygon's own extent per axis, so a region of any scale (1e-20
+    or 1e20) keeps its corners.
+    """
     if points.shape[0] < 2:
         return points
+    extent = np.max(np.abs(points), axis=0)
+    atol = 1e-15 * np.where(extent > 0.0, extent, 1.0)
+
+    def same(a: FloatArray, b: FloatArray) -> bool:
+        return bool(np.all(np.abs(a - b) <= atol + 1e-12 * np.abs(b)))
+
     keep = [0]
     for i in range(1, points.shape[0]):
-        if not np.allclose(points[i], points[keep[-1]], rtol=1e-12, atol=1e-15):
+        if not same(points[i], points[keep[-1]]):
             keep.append(i)
-    if len(keep) > 1 and np.allclose(points[keep[-1]], points[keep[0]], rtol=1e-12, atol=1e-15):
+    if len(keep) > 1 and same(points[keep[-1]], points[keep[0]]):
         keep.pop()
     return points[keep]

@@ -50,8 +50,13 @@ def _check_target(target: Path, shown: Path, force: bool) -> None:
         raise InputError(f"{shown}: cannot write: folder {str(directory)!r} does not exist")
     if target.is_dir():
         raise InputError(f"{shown}: cannot write: it is a folder; expected a file name")
-    if target.exists() and not force and not os.access(target, os.W_OK):
+    if target.exists() and not force and _read_only(target):
         raise InputError(f"{shown}: cannot write: the file is read-only (pass --force to replace it)")
+
+
+def _read_only(target: Path) -> bool:
+    """No write permission for this process, or no write bit at all (root may write a 0444 file)."""
+    return not os.access(target, os.W_OK) or not target.stat().st_mode & 0o222
 
 
 class _Interrupted(BaseException):

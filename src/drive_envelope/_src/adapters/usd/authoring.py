@@ -138,8 +138,11 @@ def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
 
 
 def _stage_name(stage: Usd.Stage) -> str:
-    identifier = str(stage.GetRootLayer().identifier)
-    return identifier if identifier else "the stage"
+    """The file a user knows the stage by: the root layer, or the asset under an in-memory overlay."""
+    root = stage.GetRootLayer()
+    if root.anonymous and root.subLayerPaths:
+        return str(root.subLayerPaths[0])
+    return str(root.realPath or root.identifier) or "the stage"
 
 
 def joint_kind(prim: Usd.Prim) -> str:
