@@ -14,7 +14,9 @@ here (same model, one solve per step) and its metadata says so.
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -148,10 +150,11 @@ def simulate(scenario: Scenario) -> Trajectory:
     time = np.arange(count + 1, dtype=np.float64) * scenario.simulation.dt
     position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
     position[0], velocity[0] = data.qpos[0], data.qvel[0]
-    for i in range(1, count + 1):
-        mujoco.mj_step(model, data)
-        _raise_on_warning(scenario, data, i)
-        position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
+    with _quiet_warnings():
+        for i in range(1, count + 1):
+            mujoco.mj_step(model, data)
+            _raise_on_warning(scenario, data, i)
+            position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
     return Trajectory(
         time=time,
         position=position,
@@ -162,6 +165,19 @@ def simulate(scenario: Scenario) -> Trajectory:
         name=scenario.name,
         metadata=_metadata(scenario),
     )
+
+
+@contextlib.contextmanager
+def _quiet_warnings() -> Iterator[None]:
+    """Keep MuJoCo from printing its own warning line: the per-step check reports it as one error."""
+    import mujoco
+
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda message: None)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
 
 
 def _raise_on_warning(scenario: Scenario, data: mujoco.MjData, step: int) -> None:
