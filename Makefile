@@ -11,7 +11,7 @@ EXTRAS ?= test,all,isaaclab
 ISAACLAB ?= isaaclab==2.3.2.post1
 STAMP := $(VENV)/.installed-$(subst ,,$(EXTRAS))
 
-.PHONY: setup demo test lint typecheck pytest bench clean
+.PHONY: setup demo test lint typecheck pytest test-mjlab bench clean
 
 $(STAMP): pyproject.toml Makefile
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -37,8 +37,8 @@ demo: setup
 	@echo "demo outputs: build/demo/ (envelope file, trajectory CSV, plot PNG)"
 
 lint: setup
-	$(BIN)/ruff check src tests benchmarks examples
-	$(BIN)/ruff format --check src tests benchmarks examples
+	$(BIN)/ruff check src tests benchmarks examples scripts
+	$(BIN)/ruff format --check src tests benchmarks examples scripts
 
 typecheck: setup
 	$(BIN)/mypy
@@ -46,10 +46,14 @@ typecheck: setup
 pytest: setup
 	$(BIN)/python -m pytest -q
 
-test: lint typecheck pytest
+# mjlab pins MuJoCo 3.11 and MuJoCo Warp 3.11: its tests run in their own environment (.venv-mjlab)
+test-mjlab: setup
+	PYTHON=$(PYTHON) scripts/test_mjlab.sh
+
+test: lint typecheck pytest test-mjlab
 
 bench: setup
 	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
+	rm -rf $(VENV) .venv-mjlab build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build

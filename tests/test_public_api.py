@@ -13,7 +13,21 @@ import pytest
 import drive_envelope
 from drive_envelope._src.params.glossary import GLOSSARY_PATH, render_glossary
 
-HEAVY = ("mujoco", "warp", "torch", "pxr", "matplotlib", "ovphysx", "newton", "pyarrow", "pandas", "yaml")
+HEAVY = (
+    "mujoco",
+    "mujoco_warp",
+    "mjlab",
+    "isaaclab",
+    "warp",
+    "torch",
+    "pxr",
+    "matplotlib",
+    "ovphysx",
+    "newton",
+    "pyarrow",
+    "pandas",
+    "yaml",
+)
 
 CORE_API = {
     "DriveEnvelopeError",
