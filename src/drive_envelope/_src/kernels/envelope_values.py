@@ -57,7 +57,7 @@ def read_envelope_values(given: Mapping[str, object], where: str) -> dict[str, n
             bad |= np.isinf(array)
         if np.any(bad):
             expected = ">= 0" if name == "max_actuator_velocity" else ">= 0 and finite"
-            raise InputError(f"{where}: {name} = {array[bad].flat[0]!r}; expected {expected}")
+            raise InputError(f"{where}: {name} = {float(array[bad].flat[0])!r}; expected {expected}")
         values[name] = array
     return values
 
