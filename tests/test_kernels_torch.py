@@ -158,50 +158,10 @@ def test_explicit_ops_broadcast_scalars_and_arrays() -> None:
     np.testing.assert_array_equal(dt.clamp_effort(caps_only, -5.0, 1.0), [-1.0, -2.0, -3.0])
 
 
-def test_actuator_applies_pd_law_and_envelope(device: str) -> None:
-    """Compute the PD effort per env and joint and clip it with the envelope at the current velocity."""
-    import torch
-
-    from drive_envelope.torch import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
-
-    cfg = EnvelopeActuatorCfg(
-        stiffness=[40.0, 10.0, 0.0],
-        damping=2.0,
-        max_effort=[12.0, 3.0, "500 N*cm"],
-        max_actuator_velocity="60 rpm",
-        speed_effort_gradient=0.5,
-    )
-    actuator = EnvelopeActuator(cfg, num_envs=64, num_joints=3, device=device)
-    gen = torch.Generator().manual_seed(0)
-    q, qd, q_des, tau_ff = (torch.randn(64, 3, generator=gen).to(device) for _ in range(4))
-    efforts = actuator.compute(JointTargets(joint_positions=q_des, joint_efforts=tau_ff), q, qd)
-
-    kp, kd = np.array([40.0, 10.0, 0.0]), 2.0
-    q_np, qd_np, q_des_np, ff_np = (t.cpu().numpy().astype(np.float64) for t in (q, qd, q_des, tau_ff))
-    law = kp * (q_des_np - q_np) - kd * qd_np + ff_np
-    np.testing.assert_allclose(actuator.computed_effort.cpu(), law, rtol=1e-5, atol=1e-5)
-    for j, max_effort in enumerate([12.0, 3.0, 5.0]):
-        env = de.PerformanceEnvelope(
-            max_effort=max_effort, max_actuator_velocity=2.0 * np.pi, speed_effort_gradient=0.5
-        )
-        expected = de.clamp_effort(env, law[:, j], qd_np[:, j])
-        np.testing.assert_allclose(efforts[:, j].cpu(), expected, rtol=1e-5, atol=1e-4)
-    assert efforts is actuator.applied_effort
-
-
 def test_bad_input_raises_input_error() -> None:
-    """Reject bad gains, envelope values, joint counts, dt and dtype with InputError."""
+    """Reject bad dt, params and dtype with InputError."""
     import drive_envelope.torch as dt
 
-    with pytest.raises(InputError, match="damping"):
-        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=-1.0, max_effort=1.0)
-    with pytest.raises(InputError, match="speed_effort_gradient"):
-        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=1.0, max_effort=1.0, speed_effort_gradient=float("nan"))
-    with pytest.raises(InputError, match="angle"):
-        dt.EnvelopeActuatorCfg(stiffness=1.0, damping=1.0, max_effort=1.0, max_actuator_velocity="5 Hz")
-    cfg = dt.EnvelopeActuatorCfg(stiffness=[1.0, 2.0], damping=1.0, max_effort=1.0)
-    with pytest.raises(InputError, match="2 values for 3 joints"):
-        dt.EnvelopeActuator(cfg, num_envs=1, num_joints=3)
     with pytest.raises(InputError, match="dt"):
         dt.clamp_effort_implicit(dt.EnvelopeTensors.from_values(max_effort=1.0), 1.0, 0.0, 1.0, -0.01)
     with pytest.raises(InputError, match="params"):

@@ -1,4 +1,4 @@
-"""The envelope on PyTorch tensors (extra ``torch``): batched ops and an Isaac Lab style actuator.
+"""The envelope on PyTorch tensors (extra ``torch``): batched, device-agnostic ops.
 
 Device-agnostic (CPU or CUDA tensors), no Python loops over DOFs; importing this module does not
 import torch (each function does). ``EnvelopeTensors`` holds the four envelope parameters as
@@ -19,20 +19,12 @@ compiles, about a minute). Example::
                                          speed_effort_gradient=0.5, device="cuda:0")
     effort = clamp_effort_implicit(params, requested, qd, response, dt=0.005)   # (num_envs, 2)
 
-``EnvelopeActuator`` has the shape of Isaac Lab's explicit actuators: ``compute(targets, joint_pos,
-joint_vel) -> efforts``, a PD law clipped by the envelope. Example::
-
-    from drive_envelope.torch import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
-
-    cfg = EnvelopeActuatorCfg(stiffness=40.0, damping=2.0, max_effort=12.0,
-                              max_actuator_velocity="300 rpm", speed_effort_gradient=0.5)
-    actuator = EnvelopeActuator(cfg, num_envs=4096, num_joints=12, device="cuda:0")
-    efforts = actuator.compute(JointTargets(joint_positions=q_target), q, qd)
+The Isaac Lab actuator built on these ops is ``drive_envelope.isaaclab.PerformanceEnvelopeActuator``
+(a real ``isaaclab.actuators.IdealPDActuator``); its envelope tensors are ``EnvelopeTensors``.
 """
 
 from __future__ import annotations
 
-from drive_envelope._src.adapters.isaaclab.actuator import EnvelopeActuator, EnvelopeActuatorCfg, JointTargets
 from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 from drive_envelope._src.kernels.torch_ops import (
     clamp_drive_impulse,
@@ -43,10 +35,7 @@ from drive_envelope._src.kernels.torch_ops import (
 )
 
 __all__ = [
-    "EnvelopeActuator",
-    "EnvelopeActuatorCfg",
     "EnvelopeTensors",
-    "JointTargets",
     "clamp_drive_impulse",
     "clamp_effort",
     "clamp_effort_implicit",

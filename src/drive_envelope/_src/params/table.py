@@ -34,11 +34,11 @@ class Parameter:
     physx_tensor_index: int | None
     """Position in the PhysX tensor API's three-value envelope (None: maxForce, not in that tensor)."""
     mujoco_plugin: str
-    """Attribute of our MuJoCo plugin ``drive_envelope.envelope``."""
+    """Slot in ``actuator_dynprm`` of the drive's first actuator (plugin ``drive_envelope.envelope``)."""
     isaac_lab: str
-    """Isaac Lab ``DriveModelCfg`` / actuator name."""
+    """Isaac Lab 2.3's name (``isaaclab.actuators`` cfg fields), and where this package puts it there."""
     newton: str
-    """Newton name, where Newton has the concept."""
+    """Newton 1.8's name where Newton has the concept, and this package's clamping stage's."""
 
 
 PARAMETERS: tuple[Parameter, ...] = (
@@ -52,9 +52,12 @@ PARAMETERS: tuple[Parameter, ...] = (
         usd_attribute="drive:{inst}:physics:maxForce",
         usd_unit_angular="N*m",
         physx_tensor_index=None,
-        mujoco_plugin="max_effort",
-        isaac_lab="effort_limit_sim / joint_effort_limit",
-        newton="joint_effort_limit / ClampingMaxEffort.max_effort",
+        mujoco_plugin="actuator_dynprm[0]",
+        isaac_lab=(
+            "`effort_limit` (an explicit actuator's clip; PerformanceEnvelopeActuatorCfg's max_effort) / "
+            "`effort_limit_sim` (PhysX's maxForce, i.e. maxEffort, through write_joint_effort_limit_to_sim)"
+        ),
+        newton="joint_effort_limit / ClampingMaxEffort.max_effort; ClampingPerformanceEnvelope.max_effort",
     ),
     Parameter(
         name="max_actuator_velocity",
@@ -66,9 +69,15 @@ PARAMETERS: tuple[Parameter, ...] = (
         usd_attribute="physxDrivePerformanceEnvelope:{inst}:maxActuatorVelocity",
         usd_unit_angular="deg/s",
         physx_tensor_index=1,
-        mujoco_plugin="max_actuator_velocity",
-        isaac_lab="DriveModelCfg.max_actuator_velocity",
-        newton="velocity_limit",
+        mujoco_plugin="actuator_dynprm[1] (-1: no limit)",
+        isaac_lab=(
+            "none (`velocity_limit_sim` is PhysX's joint speed cap maxJointVelocity; DCMotorCfg's "
+            "`velocity_limit` is its no-load speed); PerformanceEnvelopeActuatorCfg.max_actuator_velocity"
+        ),
+        newton=(
+            "ClampingDCMotor.velocity_limit (no-load speed); "
+            "ClampingPerformanceEnvelope.max_actuator_velocity"
+        ),
     ),
     Parameter(
         name="velocity_dependent_resistance",
@@ -80,9 +89,12 @@ PARAMETERS: tuple[Parameter, ...] = (
         usd_attribute="physxDrivePerformanceEnvelope:{inst}:velocityDependentResistance",
         usd_unit_angular="N*m*s/deg",
         physx_tensor_index=2,
-        mujoco_plugin="velocity_dependent_resistance",
-        isaac_lab="DriveModelCfg.velocity_dependent_resistance",
-        newton="(none)",
+        mujoco_plugin="actuator_dynprm[2]",
+        isaac_lab=(
+            "none (`viscous_friction` is joint friction, outside the envelope); "
+            "PerformanceEnvelopeActuatorCfg.velocity_dependent_resistance"
+        ),
+        newton="(none); ClampingPerformanceEnvelope.velocity_dependent_resistance",
     ),
     Parameter(
         name="speed_effort_gradient",
@@ -94,9 +106,15 @@ PARAMETERS: tuple[Parameter, ...] = (
         usd_attribute="physxDrivePerformanceEnvelope:{inst}:speedEffortGradient",
         usd_unit_angular="(deg/s)/(N*m)",
         physx_tensor_index=0,
-        mujoco_plugin="speed_effort_gradient",
-        isaac_lab="DriveModelCfg.speed_effort_gradient",
-        newton="implicit in ClampingDCMotor (saturation_effort / velocity_limit)",
+        mujoco_plugin="actuator_dynprm[3]",
+        isaac_lab=(
+            "none (DCMotorCfg's line: `velocity_limit` / `saturation_effort`); "
+            "PerformanceEnvelopeActuatorCfg.speed_effort_gradient"
+        ),
+        newton=(
+            "implicit in ClampingDCMotor (velocity_limit / saturation_effort); "
+            "ClampingPerformanceEnvelope.speed_effort_gradient"
+        ),
     ),
 )
 

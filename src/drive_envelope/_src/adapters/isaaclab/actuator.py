@@ -1,190 +1,265 @@
-"""An Isaac Lab style explicit actuator on PyTorch: a PD law whose effort is clamped by the envelope.
+"""``PerformanceEnvelopeActuator``: Isaac Lab's ideal PD actuator clipped by the PhysX envelope.
 
-Isaac Lab's explicit actuators (``IdealPDActuator``, ``DCMotor``) compute, for every environment and
-joint, ``effort = stiffness*(q_target - q) + damping*(v_target - v) + effort_target`` and then clip
-it; :class:`EnvelopeActuator` does the same with the PhysX envelope as the clip (at the current
-velocity, as every explicit actuator does). Shapes are ``(num_envs, num_joints)``; parameters are
-per joint (or scalars).
+Isaac Lab's explicit actuators compute ``effort = stiffness*(q_target - q) + damping*(v_target - v)
++ effort_target`` for every environment and joint and clip it (``IdealPDActuator``: to
+``+-effort_limit``; ``DCMotor``: to a torque-speed line). :class:`PerformanceEnvelopeActuator` is an
+``IdealPDActuator`` whose clip is the envelope's effort limit at the current joint velocity,
+``L(v) = max(min(effort_limit - R|v|, (v_max - |v|)/G), 0)``, with ``effort_limit`` (Isaac Lab's own
+field) as max_effort. It is an explicit actuator: the clip acts at the velocity the step starts
+from, one step behind PhysX's implicit clamp (``docs/isaaclab.md`` has the implicit path).
+
+The four envelope parameters are ``(num_envs, num_joints)`` tensors on the actuator
+(``effort_limit``, ``max_actuator_velocity``, ``velocity_dependent_resistance``,
+``speed_effort_gradient``), read at every :meth:`compute`, so an event term can write them per
+environment the way Isaac Lab's ``randomize_actuator_gains`` writes ``actuator.stiffness[env_ids]``;
+``default_*`` keep the configured values. The classes subclass Isaac Lab's, so they are defined
+when first asked for (:func:`build`), which imports ``isaaclab.actuators``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, NamedTuple
+from collections.abc import Mapping
+from typing import Any
 
-import numpy as np
-
-from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors, resolve_dtype
-from drive_envelope._src.kernels.torch_ops import clamp_effort
 from drive_envelope._src.values import read_envelope_value
 
-if TYPE_CHECKING:
-    import torch
+__all__ = ["ENVELOPE_ATTRIBUTES", "build", "resolve_datasheets", "si_value"]
 
-__all__ = ["EnvelopeActuator", "EnvelopeActuatorCfg", "JointTargets"]
+ENVELOPE_ATTRIBUTES = ("effort_limit", *ENVELOPE_FIELDS[1:])
+"""The actuator's envelope tensors, in the order of the envelope fields: max_effort is ``effort_limit``."""
+_DEFAULTS = {
+    "max_actuator_velocity": math.inf,
+    "velocity_dependent_resistance": 0.0,
+    "speed_effort_gradient": 0.0,
+}
+_CFG = "PerformanceEnvelopeActuatorCfg"
 
-PerJoint = float | str | Sequence[float | str]
 
+def si_value(value: Any, field: str) -> Any:
+    """A cfg value in SI: a number or string with units, or a ``{joint regex: value}`` dict of them.
 
-class JointTargets(NamedTuple):
-    """Targets of one control step, named like Isaac Lab's ``ArticulationActions`` (any may be None).
-
-    Each is a tensor of shape ``(num_envs, num_joints)``.
+    Raises:
+        InputError: a wrong unit, or a value that is not a number, string or dict.
     """
-
-    joint_positions: Any = None
-    """Target joint positions [rad or m]."""
-    joint_velocities: Any = None
-    """Target joint velocities [rad/s or m/s]."""
-    joint_efforts: Any = None
-    """Feed-forward efforts [N*m or N]."""
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
-class EnvelopeActuatorCfg:
-    """Configuration of :class:`EnvelopeActuator`; every value is a scalar or one value per joint.
-
-    Envelope values are SI numbers or strings with units (``"300 rpm"``); gains are SI numbers.
-    """
-
-    stiffness: float | Sequence[float]
-    """PD stiffness [N*m/rad or N/m], ``>= 0``."""
-    damping: float | Sequence[float]
-    """PD damping [N*m*s/rad or N*s/m], ``>= 0``."""
-    max_effort: PerJoint
-    """Effort cap at zero velocity [N*m or N], ``>= 0``, finite."""
-    max_actuator_velocity: PerJoint = math.inf
-    """Speed cap at zero effort [rad/s or m/s], ``>= 0`` (``inf``: none)."""
-    velocity_dependent_resistance: PerJoint = 0.0
-    """Effort lost per unit speed R [N*m*s/rad or N*s/m], ``>= 0``."""
-    speed_effort_gradient: PerJoint = 0.0
-    """Speed lost per unit effort G [(rad/s)/(N*m) or (m/s)/N], ``>= 0``."""
-
-    def __post_init__(self) -> None:
-        for name in ("stiffness", "damping", *ENVELOPE_FIELDS):
-            self.values(name)  # validates
-
-    def values(self, name: str) -> np.ndarray:
-        """The SI values of field ``name`` as a 1-D float64 array (one per joint, or one for all).
-
-        Raises:
-            InputError: a negative, NaN or not allowed infinite value, or a wrong unit.
-        """
-        raw = getattr(self, name)
-        items = [raw] if isinstance(raw, (str, int, float)) else list(raw)
-        where = f"EnvelopeActuatorCfg.{name}"
-        if name in ENVELOPE_FIELDS:
-            array = np.array([read_envelope_value(v, name, where) for v in items], dtype=np.float64)
-        else:
-            if any(isinstance(v, (str, bool)) or not isinstance(v, (int, float)) for v in items):
-                raise InputError(
-                    f"{where}: expected SI numbers [N*m/rad, N*m*s/rad or N/m, N*s/m], got {raw!r}"
-                )
-            array = np.array(items, dtype=np.float64)
-        finite_ok = name == "max_actuator_velocity"
-        bad = np.isnan(array) | (array < 0.0) | (np.isinf(array) & (not finite_ok))
-        if array.size == 0 or np.any(bad):
-            shown = array[bad][0] if np.any(bad) else raw
-            raise InputError(
-                f"{where}: got {shown!r}; expected values >= 0{'' if finite_ok else ' and finite'}"
-            )
-        return array
-
-
-class EnvelopeActuator:
-    """PD actuator with the PhysX envelope as its effort clip, shaped like Isaac Lab's explicit actuators.
-
-    ``compute(targets, joint_pos, joint_vel)`` returns the applied effort and keeps
-    :attr:`computed_effort` (the PD law) and :attr:`applied_effort` (after the clip), as Isaac Lab's
-    actuators do. Example::
-
-        act = EnvelopeActuator(EnvelopeActuatorCfg(stiffness=40.0, damping=2.0, max_effort=12.0,
-                               max_actuator_velocity="300 rpm", speed_effort_gradient=0.5),
-                               num_envs=4096, num_joints=12, device="cuda:0")
-        efforts = act.compute(JointTargets(joint_positions=q_des), q, qd)
-    """
-
-    def __init__(
-        self,
-        cfg: EnvelopeActuatorCfg,
-        *,
-        num_envs: int,
-        num_joints: int,
-        device: Any = "cpu",
-        dtype: Any = None,
-    ) -> None:
-        """Build the per-joint parameter tensors.
-
-        Args:
-            cfg: Gains and envelope (scalars or one value per joint).
-            num_envs: Number of environments (rows).
-            num_joints: Number of joints driven by this actuator (columns).
-            device: Torch device of every tensor.
-            dtype: Float dtype (default float32).
-        """
-        import torch
-
-        if num_envs < 1 or num_joints < 1:
-            raise InputError(
-                f"EnvelopeActuator: num_envs and num_joints must be >= 1, got {num_envs}, {num_joints}"
-            )
-        self.cfg = cfg
-        self.num_envs, self.num_joints = num_envs, num_joints
-        kind = resolve_dtype(dtype)
-        self._params = {
-            name: self._per_joint(cfg, name, torch.device(device), kind)
-            for name in ("stiffness", "damping", *ENVELOPE_FIELDS)
+    where = f"{_CFG}.{field}"
+    if isinstance(value, Mapping):
+        return {
+            str(key): read_envelope_value(item, field, f"{where}[{key!r}]") for key, item in value.items()
         }
-        self.envelope = EnvelopeTensors(**{name: self._params[name] for name in ENVELOPE_FIELDS})
-        """The envelope per joint, tensors of shape ``(1, num_joints)``."""
-        self.computed_effort = torch.zeros(num_envs, num_joints, dtype=kind, device=device)
-        """PD effort before the clip [N*m or N], ``(num_envs, num_joints)``."""
-        self.applied_effort = torch.zeros_like(self.computed_effort)
-        """Effort after the envelope clip [N*m or N], ``(num_envs, num_joints)``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise InputError(
+            f"{where}: got {value!r}; expected a number, a string with units or a {{joint regex: value}} dict"
+        )
+    return read_envelope_value(value, field, where)
 
-    def _per_joint(
-        self, cfg: EnvelopeActuatorCfg, name: str, device: torch.device, kind: torch.dtype
-    ) -> torch.Tensor:
-        import torch
 
-        values = cfg.values(name)
-        if values.size not in (1, self.num_joints):
-            raise InputError(f"EnvelopeActuatorCfg.{name}: {values.size} values for {self.num_joints} joints")
-        row = np.broadcast_to(values, (self.num_joints,))
-        return torch.as_tensor(row.copy(), dtype=kind, device=device).reshape(1, self.num_joints)
+def resolve_datasheets(datasheet: Any, joint_names: list[str]) -> dict[str, PerformanceEnvelope]:
+    """The envelope of every joint a ``datasheet`` cfg value names: one source, or ``{joint regex: source}``.
 
-    def reset(self, env_ids: Sequence[int] | None = None) -> None:
-        """Reset per-environment state: none, the actuator is stateless (kept for Isaac Lab's interface)."""
+    Raises:
+        InputError: a source the resolver cannot read, or a regex that matches no joint.
+    """
+    import re
 
-    def compute(self, targets: Any, joint_pos: torch.Tensor, joint_vel: torch.Tensor) -> torch.Tensor:
-        """PD effort towards ``targets``, clipped by the envelope at ``joint_vel``.
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
 
-        Args:
-            targets: Object with ``joint_positions``, ``joint_velocities``, ``joint_efforts`` (any
-                may be None), e.g. :class:`JointTargets` or Isaac Lab's ``ArticulationActions``.
-            joint_pos: Joint positions [rad or m], ``(num_envs, num_joints)``.
-            joint_vel: Joint velocities [rad/s or m/s], ``(num_envs, num_joints)``.
+    where = f"{_CFG}.datasheet"
+    sources = datasheet if isinstance(datasheet, Mapping) else {".*": datasheet}
+    found: dict[str, PerformanceEnvelope] = {}
+    for pattern, source in sources.items():
+        matched = [name for name in joint_names if re.fullmatch(str(pattern), name)]
+        if not matched:
+            raise InputError(f"{where}[{pattern!r}]: matches none of the joints {joint_names}")
+        envelope = resolve_envelope(source, where=f"{where}[{pattern!r}]")
+        for name in matched:
+            if name in found:
+                raise InputError(f"{where}[{pattern!r}]: joint {name!r} is matched by an earlier key too")
+            found[name] = envelope
+    return found
 
-        Returns:
-            The applied effort [N*m or N], ``(num_envs, num_joints)``.
+
+@functools.cache
+def build() -> tuple[type, type]:
+    """Define ``(PerformanceEnvelopeActuatorCfg, PerformanceEnvelopeActuator)`` (imports Isaac Lab once).
+
+    Raises:
+        ImportError: Isaac Lab's ``isaaclab.actuators`` cannot be imported.
+    """
+    import isaaclab.utils.string as string_utils
+    import torch
+    from isaaclab.actuators import IdealPDActuator, IdealPDActuatorCfg
+    from isaaclab.utils import configclass
+
+    from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
+    from drive_envelope._src.kernels.torch_ops import clamp_effort
+
+    class PerformanceEnvelopeActuator(IdealPDActuator):  # type: ignore[misc,valid-type]
+        """Ideal PD actuator whose effort is clipped by the PhysX drive performance envelope.
+
+        ``computed_effort`` holds the PD law, ``applied_effort`` the clipped effort sent to the
+        simulation as a joint effort (Isaac Lab sets the simulation's own drive gains to 0).
         """
-        import torch
 
-        p = self._params
-        effort = torch.zeros_like(self.computed_effort)
-        target_pos = getattr(targets, "joint_positions", None)
-        target_vel = getattr(targets, "joint_velocities", None)
-        feedforward = getattr(targets, "joint_efforts", None)
-        if target_pos is not None:
-            effort.addcmul_(p["stiffness"], target_pos - joint_pos)
-        # Isaac Lab's PD law damps towards the target velocity, or towards rest when there is none
-        effort.addcmul_(p["damping"], (target_vel - joint_vel) if target_vel is not None else -joint_vel)
-        if feedforward is not None:
-            effort.add_(feedforward)
-        self.computed_effort = effort
-        self.applied_effort = clamp_effort(self.envelope, effort, joint_vel)
-        return self.applied_effort
+        cfg: Any
+        effort_limit: Any
+        """max_effort [N*m or N], ``(num_envs, num_joints)`` (Isaac Lab's own field)."""
+        max_actuator_velocity: Any
+        """Speed cap at zero effort [rad/s or m/s], ``(num_envs, num_joints)``."""
+        velocity_dependent_resistance: Any
+        """Effort lost per unit speed [N*m*s/rad or N*s/m], ``(num_envs, num_joints)``."""
+        speed_effort_gradient: Any
+        """Speed lost per unit effort [(rad/s)/(N*m) or (m/s)/N], ``(num_envs, num_joints)``."""
+
+        def __init__(
+            self,
+            cfg: Any,
+            joint_names: list[str],
+            joint_ids: Any,
+            num_envs: int,
+            device: str,
+            stiffness: Any = 0.0,
+            damping: Any = 0.0,
+            armature: Any = 0.0,
+            friction: Any = 0.0,
+            dynamic_friction: Any = 0.0,
+            viscous_friction: Any = 0.0,
+            effort_limit: Any = torch.inf,
+            velocity_limit: Any = torch.inf,
+        ) -> None:
+            """Build the actuator as ``Articulation._process_actuators_cfg`` does (Isaac Lab's keywords).
+
+            The defaults of stiffness ... velocity_limit are the simulation's values for these joints
+            (from the USD through PhysX); the cfg's values replace them, Isaac Lab's rule.
+
+            Raises:
+                InputError: an envelope value that is negative, NaN, of the wrong unit or matches no
+                    joint, or a datasheet that cannot be read.
+            """
+            super().__init__(
+                cfg,
+                joint_names,
+                joint_ids,
+                num_envs,
+                device,
+                stiffness=stiffness,
+                damping=damping,
+                armature=armature,
+                friction=friction,
+                dynamic_friction=dynamic_friction,
+                viscous_friction=viscous_friction,
+                effort_limit=effort_limit,
+                velocity_limit=velocity_limit,
+            )
+            sheets = resolve_datasheets(cfg.datasheet, joint_names) if cfg.datasheet is not None else {}
+            if cfg.effort_limit is None and sheets:
+                # precedence: the cfg's own effort_limit, then the datasheet, then the simulation's value
+                self.effort_limit = self._from_sheets(sheets, "max_effort", self.effort_limit)
+            for field in ENVELOPE_FIELDS[1:]:
+                value = getattr(cfg, field)
+                tensor = torch.full_like(self.computed_effort, _DEFAULTS[field])
+                if sheets and (value is None or isinstance(value, Mapping)):
+                    tensor = self._from_sheets(sheets, field, tensor)  # a dict may name some joints only
+                if value is not None:
+                    tensor = self._apply(field, si_value(value, field), tensor)
+                setattr(self, field, tensor)
+            for attribute in ENVELOPE_ATTRIBUTES:
+                self._check(attribute, getattr(self, attribute))
+                setattr(self, f"default_{attribute}", getattr(self, attribute).clone())
+            self._joint_vel = torch.zeros_like(self.computed_effort)
+
+        def _apply(self, field: str, value: Any, base: Any) -> Any:
+            """``base`` with the cfg's value on all joints, or per regex (others keep ``base``)."""
+            if not isinstance(value, Mapping):
+                return torch.full_like(base, float(value))
+            try:
+                columns, _, values = string_utils.resolve_matching_names_values(dict(value), self.joint_names)
+            except (TypeError, ValueError) as exc:  # a regex matching no joint, or a joint matched twice
+                raise InputError(f"{_CFG}.{field}: {' '.join(str(exc).split())}") from None
+            result = base.clone()
+            result[:, columns] = torch.tensor(values, dtype=base.dtype, device=base.device)
+            return result
+
+        def _from_sheets(self, sheets: dict[str, PerformanceEnvelope], field: str, base: Any) -> Any:
+            """``base`` with the datasheet value of ``field`` on each joint a datasheet names."""
+            values = base.clone()
+            for column, name in enumerate(self.joint_names):
+                if name in sheets:
+                    values[:, column] = float(getattr(sheets[name], field))
+            return values
+
+        def _check(self, attribute: str, values: Any) -> None:
+            """Refuse negative or NaN values (inf only as a speed or effort limit), naming the joint."""
+            finite_only = attribute in ("velocity_dependent_resistance", "speed_effort_gradient")
+            bad = torch.isnan(values) | (values < 0.0)
+            if finite_only:
+                bad |= torch.isinf(values)
+            if bool(bad.any()):
+                env, column = (int(i) for i in torch.nonzero(bad)[0])
+                field = "max_effort (effort_limit)" if attribute == "effort_limit" else attribute
+                expected = ">= 0 and finite" if finite_only else ">= 0"
+                raise InputError(
+                    f"{_CFG}: {field} of joint {self.joint_names[column]!r} is "
+                    f"{float(values[env, column])!r}; expected {expected}"
+                )
+
+        @property
+        def envelope(self) -> Any:
+            """The envelope the clip uses now: :class:`EnvelopeTensors` of ``(num_envs, num_joints)``."""
+            return EnvelopeTensors(
+                max_effort=self.effort_limit,
+                max_actuator_velocity=self.max_actuator_velocity,
+                velocity_dependent_resistance=self.velocity_dependent_resistance,
+                speed_effort_gradient=self.speed_effort_gradient,
+            )
+
+        def compute(self, control_action: Any, joint_pos: Any, joint_vel: Any) -> Any:
+            """PD effort towards the targets, clipped by the envelope at ``joint_vel`` (DCMotor's pattern).
+
+            Args:
+                control_action: Isaac Lab's ``ArticulationActions`` (targets and feed-forward efforts).
+                joint_pos: Joint positions [rad or m], ``(num_envs, num_joints)``.
+                joint_vel: Joint velocities [rad/s or m/s], ``(num_envs, num_joints)``.
+
+            Returns:
+                ``control_action`` with ``joint_efforts`` = the applied effort [N*m or N] and no
+                position or velocity targets (the simulation's drive gains are 0).
+            """
+            self._joint_vel[:] = joint_vel
+            return super().compute(control_action, joint_pos, joint_vel)
+
+        def _clip_effort(self, effort: Any) -> Any:
+            """``clip(effort, -L(v), L(v))`` at the velocity of this step's :meth:`compute`."""
+            return clamp_effort(self.envelope, effort, self._joint_vel)
+
+    @configclass
+    class PerformanceEnvelopeActuatorCfg(IdealPDActuatorCfg):  # type: ignore[misc,valid-type]
+        """Configuration of :class:`PerformanceEnvelopeActuator`: Isaac Lab's PD gains plus the envelope.
+
+        ``effort_limit`` (Isaac Lab's field) is max_effort [N*m or N]. Each envelope field is a
+        number, a string with units (``"300 rpm"``) or a ``{joint regex: value}`` dict, like Isaac
+        Lab's own fields; ``datasheet`` (a catalog key, datasheet file or envelope file, or a
+        ``{joint regex: source}`` dict) fills the four for the joints it names, and any field set
+        here replaces its value. Without either: no speed limit, no slopes.
+        """
+
+        class_type: type = PerformanceEnvelopeActuator
+
+        max_actuator_velocity: dict[str, float | str] | float | str | None = None
+        """Speed cap at zero effort [rad/s or m/s] (``inf``: none). None: the datasheet's, else inf."""
+
+        velocity_dependent_resistance: dict[str, float | str] | float | str | None = None
+        """Effort lost per unit speed R [N*m*s/rad or N*s/m]. None: the datasheet's, else 0."""
+
+        speed_effort_gradient: dict[str, float | str] | float | str | None = None
+        """Speed lost per unit effort G [(rad/s)/(N*m) or (m/s)/N]. None: the datasheet's, else 0."""
+
+        datasheet: dict[str, str] | str | None = None
+        """Catalog key, datasheet or envelope file giving all four values, or ``{joint regex: source}``."""
+
+    for cls in (PerformanceEnvelopeActuator, PerformanceEnvelopeActuatorCfg):
+        cls.__module__ = "drive_envelope.isaaclab"
+    return PerformanceEnvelopeActuatorCfg, PerformanceEnvelopeActuator

@@ -1,0 +1,125 @@
+"""Cost of PerformanceEnvelopeActuator.compute against Isaac Lab's IdealPDActuator and DCMotor.
+
+The three actuators are built as Isaac Lab's ``Articulation._process_actuators_cfg`` builds them
+(``(num_envs, num_joints)`` tensors, torch on the CPU unless ``--device cuda``) with the same gains,
+and each ``compute`` gets the same ``ArticulationActions`` and joint state. Rounds alternate the
+order (ABC, CBA, ...) so machine load hits all alike; the median time per call over the rounds is
+reported with the ratios against the two baselines measured in the same run. Isaac Lab comes from
+its PyPI wheel's source tree, with the two Isaac Sim modules ``isaaclab.utils.assets`` imports
+stood in for, as ``tests/conftest.py`` does.
+
+    .venv/bin/python benchmarks/bench_isaaclab.py [--envs 4096] [--joints 12] [--rounds 41] [--device cpu]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _isaaclab() -> None:
+    sys.path.insert(0, str(ROOT / "tests"))
+    import conftest  # the wheel-layout set-up of the isaaclab tests
+
+    conftest._isaaclab_setup()
+
+
+def _build(cfg: Any, envs: int, joints: int, device: str) -> Any:
+    import torch
+
+    shape = (envs, joints)
+    return cfg.class_type(
+        cfg=cfg,
+        joint_names=[f"j{k}" for k in range(joints)],
+        joint_ids=slice(None),
+        num_envs=envs,
+        device=device,
+        stiffness=torch.zeros(shape, device=device),
+        damping=torch.zeros(shape, device=device),
+        effort_limit=torch.full(shape, 80.0, device=device),
+        velocity_limit=torch.full(shape, 100.0, device=device),
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--envs", type=int, default=4096)
+    parser.add_argument("--joints", type=int, default=12)
+    parser.add_argument("--rounds", type=int, default=41)
+    parser.add_argument("--calls", type=int, default=20, help="compute calls per timed block")
+    parser.add_argument("--device", default="cpu")
+    args = parser.parse_args()
+    _isaaclab()
+    import torch
+    from isaaclab.actuators import DCMotorCfg, IdealPDActuatorCfg
+    from isaaclab.utils.types import ArticulationActions
+
+    from drive_envelope.isaaclab import PerformanceEnvelopeActuatorCfg
+
+    gains = {"joint_names_expr": [".*"], "stiffness": 40.0, "damping": 2.0, "effort_limit": 25.0}
+    actuators = {
+        "envelope": _build(
+            PerformanceEnvelopeActuatorCfg(
+                **gains,
+                max_actuator_velocity=10.0,
+                velocity_dependent_resistance=0.1,
+                speed_effort_gradient=0.25,
+            ),
+            args.envs,
+            args.joints,
+            args.device,
+        ),
+        "ideal_pd": _build(IdealPDActuatorCfg(**gains), args.envs, args.joints, args.device),
+        "dc_motor": _build(
+            DCMotorCfg(**gains, saturation_effort=40.0, velocity_limit=10.0),
+            args.envs,
+            args.joints,
+            args.device,
+        ),
+    }
+    gen = torch.Generator(device="cpu").manual_seed(0)
+    shape = (args.envs, args.joints)
+    q, v, target = (torch.randn(shape, generator=gen).to(args.device) * s for s in (0.5, 6.0, 0.5))
+
+    def call(actuator: Any) -> None:
+        action = ArticulationActions(
+            joint_positions=target,
+            joint_velocities=torch.zeros_like(v),
+            joint_efforts=torch.zeros_like(v),
+            joint_indices=slice(None),
+        )
+        actuator.compute(action, q, v)
+
+    names = list(actuators)
+    times: dict[str, list[float]] = {name: [] for name in names}
+    for name in names:  # warm up
+        call(actuators[name])
+    for round_index in range(args.rounds):
+        order = names if round_index % 2 == 0 else names[::-1]
+        for name in order:
+            if args.device != "cpu":
+                torch.cuda.synchronize()
+            start = time.perf_counter()
+            for _ in range(args.calls):
+                call(actuators[name])
+            if args.device != "cpu":
+                torch.cuda.synchronize()
+            times[name].append((time.perf_counter() - start) / args.calls)
+    median = {name: statistics.median(values) for name, values in times.items()}
+    print(f"compute() on ({args.envs}, {args.joints}) {args.device} tensors, median of {args.rounds} rounds:")
+    for name in names:
+        print(f"  {name:<9} {median[name] * 1e6:9.1f} us")
+    print(
+        f"  envelope / ideal_pd = {median['envelope'] / median['ideal_pd']:.2f}x, "
+        f"envelope / dc_motor = {median['envelope'] / median['dc_motor']:.2f}x"
+    )
+
+
+if __name__ == "__main__":
+    main()

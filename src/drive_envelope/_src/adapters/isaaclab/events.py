@@ -1,0 +1,118 @@
+"""``randomize_actuator_envelope``: an Isaac Lab event term that randomizes the envelope per environment.
+
+It does for the envelope what Isaac Lab's ``randomize_actuator_gains`` (``isaaclab/envs/mdp/events.py``)
+does for the gains: for each :class:`PerformanceEnvelopeActuator` of the asset it takes the
+configured values of the selected environments and joints (``default_*``), applies the operation
+with a sample of the distribution and writes the result into the actuator's tensor
+(``actuator.speed_effort_gradient[env_ids] = ...``), which the next ``compute`` reads. Values are
+clipped at 0 from below (a negative envelope value is invalid), and ``inf`` stays ``inf``. Use it
+as a function-style term::
+
+    EventTermCfg(func=randomize_actuator_envelope, mode="reset", params={
+        "asset_cfg": SceneEntityCfg("robot", joint_names=[".*_KFE"]),
+        "speed_effort_gradient_distribution_params": (0.8, 1.2), "operation": "scale"})
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from drive_envelope._src.adapters.isaaclab.actuator import ENVELOPE_ATTRIBUTES
+from drive_envelope._src.errors import InputError
+
+__all__ = ["randomize_actuator_envelope"]
+
+_OPERATIONS = ("abs", "add", "scale")
+_DISTRIBUTIONS = ("uniform", "log_uniform", "gaussian")
+
+
+def _columns(actuator: Any, joint_ids: Any, device: Any) -> Any:
+    """Columns of the actuator's tensors that the asset cfg selects (a slice for all of them)."""
+    import torch
+
+    if isinstance(joint_ids, slice):
+        return slice(None)
+    wanted = torch.as_tensor(joint_ids, device=device)
+    indices = actuator.joint_indices
+    if isinstance(indices, slice):  # the actuator drives every joint: columns are joint ids
+        return wanted
+    return torch.nonzero(torch.isin(indices.to(device), wanted)).view(-1)
+
+
+def randomize_actuator_envelope(
+    env: Any,
+    env_ids: Any,
+    asset_cfg: Any,
+    max_effort_distribution_params: tuple[float, float] | None = None,
+    max_actuator_velocity_distribution_params: tuple[float, float] | None = None,
+    velocity_dependent_resistance_distribution_params: tuple[float, float] | None = None,
+    speed_effort_gradient_distribution_params: tuple[float, float] | None = None,
+    operation: str = "scale",
+    distribution: str = "uniform",
+) -> None:
+    """Randomize the envelope of the asset's ``PerformanceEnvelopeActuator`` groups for ``env_ids``.
+
+    Args:
+        env: The Isaac Lab environment (``env.scene[asset_cfg.name]`` is the articulation).
+        env_ids: Environments to randomize (None: all).
+        asset_cfg: ``SceneEntityCfg`` naming the asset and its joints (``joint_ids``).
+        max_effort_distribution_params: ``(low, high)`` (or ``(mean, std)``) for ``effort_limit``
+            [N*m or N, or a factor for ``"scale"``]; None leaves it.
+        max_actuator_velocity_distribution_params: The same for max_actuator_velocity [rad/s or m/s].
+        velocity_dependent_resistance_distribution_params: The same for R [N*m*s/rad or N*s/m].
+        speed_effort_gradient_distribution_params: The same for G [(rad/s)/(N*m) or (m/s)/N].
+        operation: ``"scale"`` (default value times the sample), ``"add"`` or ``"abs"`` (the sample).
+        distribution: ``"uniform"``, ``"log_uniform"`` or ``"gaussian"``, Isaac Lab's samplers.
+
+    Raises:
+        InputError: an unknown operation or distribution, or parameters that are not two numbers.
+    """
+    import torch
+    from isaaclab.utils import math as math_utils
+
+    from drive_envelope._src.adapters.isaaclab.actuator import build
+
+    if operation not in _OPERATIONS:
+        raise InputError(
+            f"randomize_actuator_envelope: operation = {operation!r}; expected one of {_OPERATIONS}"
+        )
+    if distribution not in _DISTRIBUTIONS:
+        raise InputError(
+            f"randomize_actuator_envelope: distribution = {distribution!r}; expected one of {_DISTRIBUTIONS}"
+        )
+    sample = getattr(math_utils, f"sample_{distribution}")
+    ranges = dict(
+        zip(
+            ENVELOPE_ATTRIBUTES,
+            (
+                max_effort_distribution_params,
+                max_actuator_velocity_distribution_params,
+                velocity_dependent_resistance_distribution_params,
+                speed_effort_gradient_distribution_params,
+            ),
+            strict=True,
+        )
+    )
+    for attribute, params in ranges.items():
+        if params is not None and (len(params) != 2 or not all(isinstance(p, (int, float)) for p in params)):
+            raise InputError(
+                f"randomize_actuator_envelope: {attribute} parameters {params!r}; expected (a, b)"
+            )
+    actuator_class: Any = build()[1]
+    asset = env.scene[asset_cfg.name]
+    groups: list[Any] = [a for a in asset.actuators.values() if isinstance(a, actuator_class)]
+    for actuator in groups:
+        device = actuator.effort_limit.device
+        rows = torch.arange(actuator.effort_limit.shape[0], device=device) if env_ids is None else env_ids
+        rows = torch.as_tensor(rows, device=device)
+        columns = _columns(actuator, asset_cfg.joint_ids, device)
+        for attribute, params in ranges.items():
+            if params is None:
+                continue
+            default = getattr(actuator, f"default_{attribute}")[rows][:, columns]
+            drawn = sample(*params, tuple(default.shape), device=device)
+            value = {"abs": drawn, "add": default + drawn, "scale": default * drawn}[operation]
+            current = getattr(actuator, attribute)
+            block = current[rows]
+            block[:, columns] = torch.where(torch.isinf(default), default, value.clamp_min(0.0))
+            current[rows] = block

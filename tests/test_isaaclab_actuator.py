@@ -1,0 +1,327 @@
+"""``PerformanceEnvelopeActuator`` inside Isaac Lab's own actuator machinery (the real ``isaaclab`` package).
+
+Isaac Lab is tested from its PyPI wheel (2.3.2.post1, installed ``--no-deps`` with ``toml`` and
+``trimesh``): ``tests/conftest.py`` puts the wheel's source tree first on ``sys.path`` and, for the
+tests marked ``isaaclab`` only, stands in for the two Isaac Sim modules ``isaaclab.utils.assets``
+imports at load time (``carb``, ``omni.client``). Everything else is Isaac Lab's code: its
+``configclass``, ``ActuatorBase`` parsing, ``IdealPDActuator``, ``DCMotor`` and
+``ArticulationActions``.
+
+:class:`_Articulation` does what Isaac Lab's ``Articulation`` does with actuators, line by line from
+``isaaclab/assets/articulation/articulation.py`` (2.3.2): ``_process_actuators_cfg`` builds each
+actuator with the simulation's per-joint defaults as ``(num_envs, num_joints)`` tensors, and
+``_apply_actuator_model`` steps them with ``ArticulationActions``. No simulator runs: the references
+are the float64 NumPy clamp (``drive_envelope.clamp_effort``) and Isaac Lab's own ``DCMotor``.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+import drive_envelope as de
+from drive_envelope.errors import InputError
+
+pytestmark = [
+    pytest.mark.isaaclab,
+    pytest.mark.torch,
+    # isaaclab.utils.math (Isaac Lab's samplers) still decorates with torch.jit.script
+    pytest.mark.filterwarnings("ignore:`torch.jit.script` is deprecated:FutureWarning"),
+]
+
+JOINTS = ["LF_HAA", "LF_HFE", "LF_KFE", "RF_HAA", "RF_HFE", "RF_KFE"]
+NUM_ENVS = 5
+
+
+class _Articulation:
+    """Isaac Lab's ``Articulation`` actuator handling on tensors (no PhysX view behind it)."""
+
+    def __init__(
+        self, actuators: dict[str, Any], *, num_envs: int = NUM_ENVS, effort_limit: float = 80.0
+    ) -> None:
+        import isaaclab.utils.string as string_utils
+        import torch
+        from isaaclab.actuators import ImplicitActuator
+
+        self.joint_names, self.num_envs, self.device = JOINTS, num_envs, "cpu"
+        shape = (num_envs, len(JOINTS))
+        # what the PhysX view reports from the USD (get_dof_stiffnesses, get_dof_max_forces, ...)
+        self.default_joint_stiffness = torch.full(shape, 3.0)
+        self.default_joint_damping = torch.full(shape, 0.5)
+        self.joint_effort_limits = torch.full(shape, effort_limit)
+        self.joint_vel_limits = torch.full(shape, 100.0)
+        self.joint_pos_target = torch.zeros(shape)
+        self.joint_vel_target = torch.zeros(shape)
+        self.joint_effort_target = torch.zeros(shape)
+        self.joint_effort_target_sim = torch.zeros(shape)
+        self.computed_torque, self.applied_torque = torch.zeros(shape), torch.zeros(shape)
+        self.sim_stiffness = {}
+        self.actuators = {}
+        for name, cfg in actuators.items():  # _process_actuators_cfg
+            joint_ids, joint_names = string_utils.resolve_matching_names(
+                cfg.joint_names_expr, self.joint_names
+            )
+            joint_ids = slice(None) if len(joint_names) == len(JOINTS) else torch.tensor(joint_ids)
+            actuator = cfg.class_type(
+                cfg=cfg,
+                joint_names=joint_names,
+                joint_ids=joint_ids,
+                num_envs=num_envs,
+                device=self.device,
+                stiffness=self.default_joint_stiffness[:, joint_ids],
+                damping=self.default_joint_damping[:, joint_ids],
+                armature=torch.zeros(shape)[:, joint_ids],
+                friction=torch.zeros(shape)[:, joint_ids],
+                dynamic_friction=torch.zeros(shape)[:, joint_ids],
+                viscous_friction=torch.zeros(shape)[:, joint_ids],
+                effort_limit=self.joint_effort_limits[:, joint_ids].clone(),
+                velocity_limit=self.joint_vel_limits[:, joint_ids],
+            )
+            self.actuators[name] = actuator
+            # explicit actuators: the simulation's drive gains go to 0 (write_joint_stiffness_to_sim)
+            self.sim_stiffness[name] = actuator.stiffness if isinstance(actuator, ImplicitActuator) else 0.0
+
+    def apply_actuator_model(self, joint_pos: Any, joint_vel: Any) -> None:
+        """``Articulation._apply_actuator_model``: each group computes, the sim buffers are filled."""
+        from isaaclab.utils.types import ArticulationActions
+
+        for actuator in self.actuators.values():
+            ids = actuator.joint_indices
+            action = ArticulationActions(
+                joint_positions=self.joint_pos_target[:, ids],
+                joint_velocities=self.joint_vel_target[:, ids],
+                joint_efforts=self.joint_effort_target[:, ids],
+                joint_indices=ids,
+            )
+            action = actuator.compute(action, joint_pos=joint_pos[:, ids], joint_vel=joint_vel[:, ids])
+            assert action.joint_positions is None and action.joint_velocities is None  # explicit
+            self.joint_effort_target_sim[:, ids] = action.joint_efforts
+            self.computed_torque[:, ids] = actuator.computed_effort
+            self.applied_torque[:, ids] = actuator.applied_effort
+
+
+def _cfg(**fields: Any) -> Any:
+    from drive_envelope.isaaclab import PerformanceEnvelopeActuatorCfg
+
+    base = {"joint_names_expr": [".*"], "stiffness": 40.0, "damping": 2.0}
+    return PerformanceEnvelopeActuatorCfg(**{**base, **fields})
+
+
+def test_cfg_is_an_isaac_lab_configclass_naming_its_actuator() -> None:
+    """Subclass IdealPDActuatorCfg with class_type = PerformanceEnvelopeActuator, like Isaac Lab's cfgs."""
+    from isaaclab.actuators import IdealPDActuator, IdealPDActuatorCfg
+
+    from drive_envelope.isaaclab import PerformanceEnvelopeActuator
+
+    cfg = _cfg(max_actuator_velocity="300 rpm")
+    assert isinstance(cfg, IdealPDActuatorCfg) and cfg.class_type is PerformanceEnvelopeActuator
+    assert issubclass(PerformanceEnvelopeActuator, IdealPDActuator)
+    copied = cfg.copy()  # configclass's own utilities work on it
+    assert copied.max_actuator_velocity == "300 rpm" and copied.to_dict()["datasheet"] is None
+
+
+def test_built_as_the_articulation_builds_it_with_per_env_tensors() -> None:
+    """Parse floats, units, regex dicts and datasheets into (num_envs, num_joints) tensors, in order."""
+    cfg = _cfg(
+        datasheet={".*_HAA": "tmotor-ak80-6", ".*_HFE": "cubemars-ak80-9-v3"},
+        max_actuator_velocity={".*_HFE": "300 rpm"},  # replaces the datasheet's on the HFE joints
+        speed_effort_gradient=0.25,  # replaces every datasheet's
+    )
+    actuator = _Articulation({"legs": cfg}).actuators["legs"]
+    from drive_envelope.datasheet import resolve_envelope
+
+    ak80_6, ak80_9 = resolve_envelope("tmotor-ak80-6"), resolve_envelope("cubemars-ak80-9-v3")
+    column = {name: k for k, name in enumerate(actuator.joint_names)}
+    for name in ("LF_HAA", "RF_HAA"):
+        assert actuator.effort_limit[0, column[name]] == pytest.approx(ak80_6.max_effort)
+        assert actuator.max_actuator_velocity[0, column[name]] == pytest.approx(ak80_6.max_actuator_velocity)
+    for name in ("LF_HFE", "RF_HFE"):
+        assert actuator.effort_limit[0, column[name]] == pytest.approx(ak80_9.max_effort)
+        assert actuator.max_actuator_velocity[0, column[name]] == pytest.approx(10.0 * math.pi)
+    for name in ("LF_KFE", "RF_KFE"):  # no datasheet: Isaac Lab's effort limit (the USD's), no speed limit
+        assert actuator.effort_limit[0, column[name]] == 80.0
+        assert math.isinf(actuator.max_actuator_velocity[0, column[name]])
+    for attribute in (
+        "effort_limit",
+        "max_actuator_velocity",
+        "velocity_dependent_resistance",
+        "speed_effort_gradient",
+    ):
+        tensor = getattr(actuator, attribute)
+        assert tuple(tensor.shape) == (NUM_ENVS, len(JOINTS))
+        assert bool((getattr(actuator, f"default_{attribute}") == tensor).all())
+    assert bool((actuator.speed_effort_gradient == 0.25).all())
+    assert bool((actuator.stiffness == 40.0).all())  # the cfg's gains replace the USD's (3.0)
+
+
+def test_compute_fills_efforts_like_isaac_lab_and_clips_by_the_envelope() -> None:
+    """Step as _apply_actuator_model does: computed = PD law, applied = the core clamp at the velocity."""
+    import torch
+
+    envelope = {
+        "max_actuator_velocity": 8.0,
+        "velocity_dependent_resistance": 0.3,
+        "speed_effort_gradient": 0.5,
+    }
+    articulation = _Articulation({"legs": _cfg(effort_limit=12.0, **envelope)})
+    rng = np.random.default_rng(3)
+    shape = (NUM_ENVS, len(JOINTS))
+    articulation.joint_pos_target[:] = torch.as_tensor(rng.normal(0.0, 0.5, shape), dtype=torch.float32)
+    articulation.joint_vel_target[:] = torch.as_tensor(rng.normal(0.0, 2.0, shape), dtype=torch.float32)
+    articulation.joint_effort_target[:] = torch.as_tensor(rng.normal(0.0, 3.0, shape), dtype=torch.float32)
+    q = torch.as_tensor(rng.normal(0.0, 0.5, shape), dtype=torch.float32)
+    v = torch.as_tensor(rng.normal(0.0, 6.0, shape), dtype=torch.float32)
+    articulation.apply_actuator_model(q, v)
+    pd = (
+        40.0 * (articulation.joint_pos_target - q)
+        + 2.0 * (articulation.joint_vel_target - v)
+        + articulation.joint_effort_target
+    )
+    np.testing.assert_allclose(articulation.computed_torque.numpy(), pd.numpy(), rtol=1e-6, atol=1e-5)
+    reference = de.clamp_effort(
+        de.PerformanceEnvelope(max_effort=12.0, **envelope),
+        pd.numpy().astype(np.float64),
+        v.numpy().astype(np.float64),
+    )
+    np.testing.assert_allclose(articulation.applied_torque.numpy(), reference, rtol=1e-5, atol=1e-5)
+    np.testing.assert_array_equal(
+        articulation.joint_effort_target_sim.numpy(), articulation.applied_torque.numpy()
+    )
+    assert articulation.sim_stiffness["legs"] == 0.0  # an explicit actuator: PhysX's drive gains are 0
+
+
+def test_two_groups_on_joint_subsets_index_their_own_columns() -> None:
+    """Build two groups on disjoint joints (tensor joint_ids) and clip each with its own envelope."""
+    import torch
+
+    articulation = _Articulation(
+        {
+            "hips": _cfg(joint_names_expr=[".*_HAA", ".*_HFE"], effort_limit=5.0, max_actuator_velocity=2.0),
+            "knees": _cfg(joint_names_expr=[".*_KFE"], effort_limit=30.0),
+        }
+    )
+    knees = articulation.actuators["knees"]
+    assert knees.joint_indices.tolist() == [2, 5]
+    articulation.joint_effort_target[:] = 100.0
+    for speed, hips in ((1.5, 5.0), (2.5, 0.0)):  # G = 0: the box up to the hips' 2 rad/s, nothing above
+        v = torch.full((NUM_ENVS, len(JOINTS)), speed)
+        articulation.apply_actuator_model(torch.zeros_like(v), v)
+        applied = articulation.applied_torque
+        assert bool((applied[:, [2, 5]] == 30.0).all())  # knees: only their effort cap
+        assert bool((applied[:, [0, 1, 3, 4]] == hips).all())
+
+
+def test_equals_dc_motor_when_driving_and_allows_less_when_braking() -> None:
+    """Agree with Isaac Lab's DCMotor when driving; brake less at speed and not at all above v_lim."""
+    import torch
+    from isaaclab.actuators import DCMotorCfg
+
+    sat, v_lim, max_e = 40.0, 10.0, 25.0
+    dc_cfg = DCMotorCfg(
+        joint_names_expr=[".*"],
+        stiffness=0.0,
+        damping=0.0,
+        saturation_effort=sat,
+        velocity_limit=v_lim,
+        effort_limit=max_e,
+    )
+    ours_cfg = _cfg(
+        stiffness=0.0,
+        damping=0.0,
+        effort_limit=max_e,
+        max_actuator_velocity=v_lim,
+        speed_effort_gradient=v_lim / sat,
+    )
+    articulation = _Articulation({"dc": dc_cfg}, num_envs=200)
+    twin = _Articulation({"envelope": ours_cfg}, num_envs=200)
+    velocity = torch.linspace(-9.9, 9.9, 200)[:, None].expand(200, len(JOINTS)).contiguous()
+    for sign in (1.0, -1.0):  # along the motion (driving), then against it (braking)
+        request = sign * 1000.0 * torch.sign(velocity)
+        for stand in (articulation, twin):
+            stand.joint_effort_target[:] = request
+            stand.apply_actuator_model(torch.zeros_like(velocity), velocity)
+        dc, ours = articulation.applied_torque, twin.applied_torque
+        if sign > 0:
+            np.testing.assert_allclose(ours.numpy(), dc.numpy(), rtol=1e-6, atol=1e-5)
+        else:
+            assert bool((dc.abs() == max_e).all())  # DCMotor brakes with the full cap at any speed
+            corner = v_lim * (1.0 - max_e / sat)  # beyond it the envelope's speed line binds
+            fast = velocity.abs() > corner + 1e-3
+            assert bool((ours.abs() <= dc.abs() + 1e-6).all()) and bool(
+                (ours.abs()[fast] < dc.abs()[fast]).all()
+            )
+    above = torch.full((1, len(JOINTS)), 12.0)  # past the speed limit, driven by something else
+    for stand in (articulation, twin):
+        stand.joint_effort_target[:] = -1000.0
+        stand.apply_actuator_model(torch.zeros_like(above).expand(200, -1), above.expand(200, -1))
+    assert bool((articulation.applied_torque == -max_e).all()) and bool((twin.applied_torque == 0.0).all())
+
+
+def test_event_terms_write_the_envelope_per_environment() -> None:
+    """Write envelope tensors per env as randomize_actuator_gains writes gains; the next compute uses them."""
+    import torch
+
+    from drive_envelope.isaaclab import randomize_actuator_envelope
+
+    articulation = _Articulation(
+        {"legs": _cfg(effort_limit=12.0, max_actuator_velocity=8.0, speed_effort_gradient=0.5)}
+    )
+    actuator = articulation.actuators["legs"]
+    env_ids = torch.tensor([1, 3])
+    actuator.speed_effort_gradient[env_ids] = 2.0  # what an event term does: in place, per env
+    articulation.joint_effort_target[:] = 50.0
+    v = torch.full((NUM_ENVS, len(JOINTS)), 4.0)
+    articulation.apply_actuator_model(torch.zeros_like(v), v)
+    limits = articulation.applied_torque[:, 0]
+    assert limits.tolist() == pytest.approx([8.0, 2.0, 8.0, 2.0, 8.0])  # (8 - 4)/G
+    # the event term: scale G by U(0.5, 0.5) on env 0 only, for the KFE joints of the asset cfg
+    env = SimpleNamespace(scene={"robot": articulation})
+    asset_cfg = SimpleNamespace(name="robot", joint_ids=[2, 5])
+    randomize_actuator_envelope(
+        env, torch.tensor([0]), asset_cfg, speed_effort_gradient_distribution_params=(0.5, 0.5)
+    )
+    assert actuator.speed_effort_gradient[0].tolist() == pytest.approx([0.5, 0.5, 0.25, 0.5, 0.5, 0.25])
+    assert actuator.speed_effort_gradient[1].tolist() == pytest.approx([2.0] * 6)  # other envs untouched
+    randomize_actuator_envelope(
+        env,
+        None,
+        SimpleNamespace(name="robot", joint_ids=slice(None)),
+        max_actuator_velocity_distribution_params=(-50.0, -50.0),
+        operation="add",
+    )
+    assert bool((actuator.max_actuator_velocity == 0.0).all())  # clipped at 0, never negative
+    with pytest.raises(InputError, match="operation = 'mul'"):
+        randomize_actuator_envelope(env, None, asset_cfg, operation="mul")
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"speed_effort_gradient": -0.1}, r"speed_effort_gradient of joint 'LF_HAA' is -0\.1"),
+        ({"max_actuator_velocity": "5 Hz"}, "angle"),
+        ({"velocity_dependent_resistance": {"nope_.*": 1.0}}, r"velocity_dependent_resistance: .*nope_"),
+        ({"datasheet": "no-such-motor"}, r"datasheet\['\.\*'\]"),
+        ({"effort_limit": -1.0}, r"max_effort \(effort_limit\) of joint 'LF_HAA' is -1\.0"),
+        ({"max_actuator_velocity": [1.0]}, "expected a number, a string with units"),
+    ],
+)
+def test_bad_cfg_values_are_one_line_errors(fields: dict[str, Any], message: str) -> None:
+    """Refuse bad envelope values with one InputError naming the cfg field and joint."""
+    with pytest.raises(InputError, match=message):
+        _Articulation({"legs": _cfg(**fields)})
+
+
+def test_facade_import_is_light() -> None:
+    """Import drive_envelope.isaaclab without Isaac Lab, torch or warp."""
+    code = (
+        "import sys, drive_envelope.isaaclab\n"
+        "print(sorted(m for m in ('isaaclab', 'torch', 'warp') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
