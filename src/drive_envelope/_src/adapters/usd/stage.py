@@ -53,16 +53,30 @@ class UsdStageWarning(UserWarning):
 def register_schemas() -> None:
     """Make the codeless PhysX schemas known to USD (``import physx_usd_schemas`` registers them).
 
+    USD builds its schema registry once per process, on first use: if something read schemas
+    before ``physx_usd_schemas`` was imported (Newton's ``add_usd``, another library), the envelope
+    API stays unknown and every joint would silently read as having no envelope. That is refused.
+
     Raises:
-        InputError: usd-core or physx-usd-schemas is not installed.
+        InputError: usd-core or physx-usd-schemas is not installed, or USD's schema registry was
+            built before the PhysX schemas were registered.
     """
     try:
         import physx_usd_schemas  # noqa: F401 - registers the schema plugins on import
-        from pxr import Usd  # noqa: F401
+        from pxr import Usd
     except ImportError as exc:
         raise InputError(
             f"USD support needs the 'usd' extra (pip install 'drive-envelope[usd]'): missing {exc.name!r}"
         ) from None
+    if Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(_ENVELOPE_API) is None:
+        raise InputError(
+            f"USD does not know {_ENVELOPE_API}: its schema registry was built before the PhysX schemas "
+            "were registered; call drive_envelope.usd.register_schemas() (or import physx_usd_schemas) "
+            "before anything opens a USD stage in this process"
+        )
+
+
+_ENVELOPE_API = "PhysxDrivePerformanceEnvelopeAPI"
 
 
 def clean_usd_message(text: str) -> str:
