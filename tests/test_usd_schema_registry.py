@@ -30,7 +30,8 @@ def test_registering_first_works() -> None:
         "from drive_envelope._src.adapters.usd.stage import register_schemas\n"
         "register_schemas()\n"
         "from pxr import Usd\n"
-        "print(Usd.SchemaRegistry().FindAppliedAPIPrimDefinition('PhysxDrivePerformanceEnvelopeAPI') is not None)\n"
+        "api = 'PhysxDrivePerformanceEnvelopeAPI'\n"
+        "print(Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(api) is not None)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "True"
