@@ -28,7 +28,10 @@ def register(subparsers: Any) -> None:
         "--engine",
         choices=tuple(ENGINES),
         default="reference",
-        help="reference (float64 model of the PhysX solver, default), mujoco, physx (real PhysX via ovphysx)",
+        help=(
+            "reference (float64 model of the PhysX solver, default), mujoco (the native plugin), "
+            "physx (real PhysX via ovphysx), newton (Featherstone with the implicit actuator)"
+        ),
     )
     add_output_argument(
         parser, "trajectory file (.csv, .json, .parquet), atomically; '-' or absent: stdout", metavar="OUT"
