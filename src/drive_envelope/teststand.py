@@ -6,10 +6,16 @@ position, velocity and the step-average total actuator effort, SI), which ``save
 as CSV, JSON or Parquet. A run of more than ``max_steps`` steps (:data:`MAX_STEPS` by default) is
 refused before it starts. The ``reference`` engine is a float64 NumPy model of the PhysX articulation solver
 (PGS and TGS); ``mujoco`` and ``physx`` need their extras.
+
+A bench's loads: :class:`PendulumSpec` (a point mass pulled by gravity), :class:`FrictionSpec`
+(PhysX 5.6 joint friction: static, dynamic, viscous) and ``JointSpec.armature``; a
+:class:`DriveSchedule` replays per-step drive targets and power states (``simulate(..., schedule=)``).
 """
 
 from __future__ import annotations
 
+from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec, PendulumSpec
+from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import (
     DriveSpec,
     JointSpec,
@@ -31,9 +37,13 @@ from drive_envelope._src.teststand.engines import ENGINES, MAX_STEPS, engine_nam
 __all__ = [
     "ENGINES",
     "MAX_STEPS",
+    "STANDARD_GRAVITY",
+    "DriveSchedule",
     "DriveSpec",
+    "FrictionSpec",
     "JointSpec",
     "LoadSpec",
+    "PendulumSpec",
     "Scenario",
     "SimulationSpec",
     "Trajectory",

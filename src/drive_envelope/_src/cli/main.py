@@ -20,6 +20,7 @@ from drive_envelope._src.cli.commands import (
     derive,
     envelope,
     fit,
+    identify,
     mujoco,
     plot,
     simulate,
@@ -31,7 +32,7 @@ from drive_envelope._src.version import VERSION
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
-COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit)
+COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit, identify)
 """The subcommand modules, in the order ``--help`` lists them; each has ``register(subparsers)``."""
 
 _ISSUES = "https://github.com/drive-envelope/drive-envelope/issues"

@@ -11,7 +11,7 @@ from drive_envelope._src.values import nearest_key
 
 __all__ = ["SECTIONS", "apply_overrides", "parse_override"]
 
-SECTIONS = ("joint", "drive", "envelope", "load", "simulation")
+SECTIONS = ("joint", "drive", "envelope", "load", "pendulum", "friction", "simulation")
 """The tables of a scenario file."""
 _SECTIONS = SECTIONS
 

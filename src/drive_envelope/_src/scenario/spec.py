@@ -1,7 +1,9 @@
 """Test-stand scenario files: one actuated joint (one DOF, fixed base) driving a rigid inertia.
 
 A scenario file (TOML, JSON or YAML) has the sections ``[joint]``, ``[drive]``, ``[envelope]``
-(optional), ``[load]`` and ``[simulation]``; quantities are bare SI numbers or strings with units.
+(optional), ``[load]``, ``[pendulum]`` and ``[friction]`` (optional, see
+:mod:`~drive_envelope._src.scenario.loads`) and ``[simulation]``; quantities are bare SI numbers or
+strings with units.
 ``load_scenario`` reads it, applies ``--set section.key=value`` overrides and validates every value;
 every mistake raises one :class:`~drive_envelope.errors.InputError` line naming the file (or
 ``--set``), the key, the value and what was expected.
@@ -25,15 +27,31 @@ from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
+from drive_envelope._src.scenario.checks import check_finite as _check_finite
+from drive_envelope._src.scenario.checks import check_int as _check_int
+from drive_envelope._src.scenario.checks import check_keys as _check_keys
+from drive_envelope._src.scenario.checks import choice as _choice
+from drive_envelope._src.scenario.checks import quantities as _quantities
+from drive_envelope._src.scenario.checks import read_text as _read_text
+from drive_envelope._src.scenario.checks import table as _table
+from drive_envelope._src.scenario.checks import unit_for as _unit
+from drive_envelope._src.scenario.loads import (
+    STANDARD_GRAVITY,
+    FrictionSpec,
+    PendulumSpec,
+    read_friction,
+    read_pendulum,
+)
 from drive_envelope._src.scenario.overrides import SECTIONS as _SECTIONS
 from drive_envelope._src.scenario.overrides import apply_overrides, parse_override
 from drive_envelope._src.units import to_si
-from drive_envelope._src.values import nearest_key, read_quantity
 
 __all__ = [
     "DriveSpec",
+    "FrictionSpec",
     "JointSpec",
     "LoadSpec",
+    "PendulumSpec",
     "Scenario",
     "SimulationSpec",
     "SolverType",
@@ -52,15 +70,10 @@ _ENVELOPE_KEYS = (
     "velocity_dependent_resistance",
     "speed_effort_gradient",
 )
-_MAX_ITERATIONS = 255  # PhysX stores solver iteration counts in 8 bits
 # PhysX steps in float32: a (sub)step below its smallest normal number, or above its largest, is
 # 0 or inf there, and the float64 reference would divide by a subnormal
 _MIN_STEP = 1.1754943508222875e-38
 _MAX_STEP = 3.4028234663852886e38
-
-
-def _unit(joint: str, revolute: str, prismatic: str) -> str:
-    return revolute if joint == "revolute" else prismatic
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -70,7 +83,11 @@ class JointSpec:
     type: JointType = "revolute"
     """``"revolute"`` (angles in rad, efforts in N*m) or ``"prismatic"`` (m, N)."""
     inertia: float
-    """Moment of inertia about the axis [kg*m^2] (revolute) or mass [kg] (prismatic); ``> 0``."""
+    """Moment of inertia about the axis [kg*m^2] (revolute) or mass [kg] (prismatic) of the link,
+    a ``[pendulum]`` point mass not included; ``> 0``."""
+    armature: float = 0.0
+    """Rotor inertia reflected to the joint, added to the joint-space inertia (PhysX
+    ``armature``) [kg*m^2 or kg]; ``>= 0``."""
     initial_position: float = 0.0
     """Joint position at t = 0 [rad or m]."""
     initial_velocity: float = 0.0
@@ -80,6 +97,7 @@ class JointSpec:
         if self.type not in ("revolute", "prismatic"):
             raise InputError(f"joint.type must be 'revolute' or 'prismatic', got {self.type!r}")
         _check_finite("joint.inertia", self.inertia, positive=True)
+        _check_finite("joint.armature", self.armature, nonnegative=True)
         _check_finite("joint.initial_position", self.initial_position)
         _check_finite("joint.initial_velocity", self.initial_velocity)
 
@@ -145,9 +163,13 @@ class SimulationSpec:
     """Solver position iterations (TGS: substeps), 1..255."""
     velocity_iterations: int = 1
     """Solver velocity iterations, 0..255."""
+    gravity: float = STANDARD_GRAVITY
+    """Gravitational acceleration on a ``[pendulum]`` [m/s^2]; ``>= 0``. The stand has no
+    gravity otherwise (the link's centre of mass is on the joint axis)."""
 
     def __post_init__(self) -> None:
         _check_finite("simulation.dt", self.dt, positive=True)
+        _check_finite("simulation.gravity", self.gravity, nonnegative=True)
         _check_finite("simulation.duration", self.duration, nonnegative=True)
         if self.solver not in ("pgs", "tgs"):
             raise InputError(f"simulation.solver must be 'pgs' or 'tgs', got {self.solver!r}")
@@ -185,6 +207,10 @@ class Scenario:
     drive + applied effort). Its ``max_effort`` must equal ``drive.max_effort``."""
     load: LoadSpec = field(default_factory=LoadSpec)
     """Constant external and applied efforts."""
+    pendulum: PendulumSpec | None = None
+    """A point mass pulled by gravity (revolute joints), or None."""
+    friction: FrictionSpec = field(default_factory=FrictionSpec)
+    """PhysX joint friction (static, dynamic, viscous); none by default."""
     simulation: SimulationSpec = field(default_factory=SimulationSpec)
     """Time step, duration and solver."""
     name: str = ""
@@ -193,6 +219,8 @@ class Scenario:
     """Free text from the file."""
 
     def __post_init__(self) -> None:
+        if self.pendulum is not None and self.joint.type != "revolute":
+            raise InputError(f"[pendulum] needs a revolute joint, got joint.type {self.joint.type!r}")
         if self.envelope is None:
             return
         if self.envelope.joint != self.joint.type:
@@ -204,6 +232,12 @@ class Scenario:
                 f"envelope.max_effort ({self.envelope.max_effort!r}) must equal drive.max_effort "
                 f"({self.drive.max_effort!r}): PhysX uses the drive's maxForce as maxEffort"
             )
+
+    @property
+    def effective_inertia(self) -> float:
+        """Joint-space inertia PhysX solves with: link + armature + pendulum m*d^2 [kg*m^2 or kg]."""
+        pendulum = self.pendulum.inertia if self.pendulum is not None else 0.0
+        return self.joint.inertia + self.joint.armature + pendulum
 
     def effective_envelope(self) -> PerformanceEnvelope | None:
         """The envelope PhysX applies to drive + applied effort.
@@ -217,23 +251,6 @@ class Scenario:
         if math.isinf(self.drive.max_effort):
             return None
         return PerformanceEnvelope(max_effort=self.drive.max_effort, joint=self.joint.type)
-
-
-# -- validation helpers -----------------------------------------------------------------------------
-
-
-def _check_finite(name: str, value: float, *, positive: bool = False, nonnegative: bool = False) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(f"{name} must be a finite number, got {value!r}")
-    if positive and not value > 0.0:
-        raise InputError(f"{name} must be > 0, got {value!r}")
-    if nonnegative and value < 0.0:
-        raise InputError(f"{name} must be >= 0, got {value!r}")
-
-
-def _check_int(name: str, value: int, low: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= _MAX_ITERATIONS:
-        raise InputError(f"{name} must be an integer in {low}..{_MAX_ITERATIONS}, got {value!r}")
 
 
 # -- reading ----------------------------------------------------------------------------------------
@@ -267,7 +284,8 @@ def scenario_from_mapping(
     """Build a :class:`Scenario` from a raw mapping (the parsed file).
 
     Args:
-        data: Sections ``joint`` (required), ``drive``, ``envelope``, ``load``, ``simulation``.
+        data: Sections ``joint`` (required), ``drive``, ``envelope``, ``load``, ``pendulum``,
+            ``friction``, ``simulation``.
         source: File name used in error messages.
         base_dir: Directory against which a relative ``envelope.datasheet`` path is resolved.
         default_name: Scenario name when the mapping has no ``name``.
@@ -284,6 +302,8 @@ def scenario_from_mapping(
         drive = _read_drive(sections["drive"], joint.type, source)
         envelope, drive = _read_envelope(sections["envelope"], drive, joint.type, source, base_dir)
         load = _read_load(sections["load"], joint.type, source)
+        pendulum = read_pendulum(sections["pendulum"], joint.type, source)
+        friction = read_friction(sections["friction"], joint.type, source)
         simulation = _read_simulation(sections["simulation"], source)
         name = _read_text(data, "name", source) or default_name
         description = _read_text(data, "description", source)
@@ -292,6 +312,8 @@ def scenario_from_mapping(
             drive=drive,
             envelope=envelope,
             load=load,
+            pendulum=pendulum,
+            friction=friction,
             simulation=simulation,
             name=name,
             description=description,
@@ -301,56 +323,9 @@ def scenario_from_mapping(
         raise InputError(message if message.startswith(f"{source}:") else f"{source}: {message}") from None
 
 
-def _table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
-    table = data.get(name, {})
-    if not isinstance(table, Mapping):
-        raise InputError(f"{source}: key {name!r}: expected a table [{name}], got {table!r}")
-    return dict(table)
-
-
-def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], source: str, section: str) -> None:
-    prefix = f"{section}." if section else ""
-    for key in table:
-        if key not in valid:
-            raise InputError(
-                f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), valid)}; "
-                f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
-            )
-
-
-def _read_text(data: Mapping[str, Any], key: str, source: str) -> str:
-    value = data.get(key, "")
-    if not isinstance(value, str):
-        raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")
-    return value
-
-
-def _choice(table: Mapping[str, Any], section: str, key: str, choices: tuple[str, ...], source: str) -> str:
-    value = table.get(key, choices[0])
-    if value not in choices:
-        raise InputError(
-            f"{source}: key '{section}.{key}': expected one of {', '.join(map(repr, choices))}, got {value!r}"
-        )
-    return str(value)
-
-
-def _quantities(
-    table: Mapping[str, Any], section: str, units: Mapping[str, str], source: str
-) -> dict[str, float]:
-    """Read every key of ``units`` present in ``table`` as an SI float (strings may carry units)."""
-    values = {}
-    for key, unit in units.items():
-        if key in table:
-            where = f"{source}: key '{section}.{key}'"
-            value = read_quantity(table[key], unit, where)
-            if math.isnan(value):
-                raise InputError(f"{where}: expected a number in {unit}, got {table[key]!r}")
-            values[key] = value
-    return values
-
-
 def _read_joint(table: Mapping[str, Any], source: str) -> JointSpec:
-    _check_keys(table, ("type", "inertia", "initial_position", "initial_velocity"), source, "joint")
+    keys = ("type", "inertia", "armature", "initial_position", "initial_velocity")
+    _check_keys(table, keys, source, "joint")
     joint = _choice(table, "joint", "type", ("revolute", "prismatic"), source)
     if "inertia" not in table:
         raise InputError(
@@ -358,6 +333,7 @@ def _read_joint(table: Mapping[str, Any], source: str) -> JointSpec:
         )
     units = {
         "inertia": _unit(joint, "kg*m**2", "kg"),
+        "armature": _unit(joint, "kg*m**2", "kg"),
         "initial_position": _unit(joint, "rad", "m"),
         "initial_velocity": _unit(joint, "rad/s", "m/s"),
     }
@@ -453,7 +429,7 @@ def _read_load(table: Mapping[str, Any], joint: str, source: str) -> LoadSpec:
 
 
 def _read_simulation(table: Mapping[str, Any], source: str) -> SimulationSpec:
-    keys = ("dt", "duration", "solver", "position_iterations", "velocity_iterations")
+    keys = ("dt", "duration", "solver", "position_iterations", "velocity_iterations", "gravity")
     _check_keys(table, keys, source, "simulation")
     solver = _choice(table, "simulation", "solver", ("tgs", "pgs"), source)
     times = {
@@ -461,6 +437,7 @@ def _read_simulation(table: Mapping[str, Any], source: str) -> SimulationSpec:
         for key in ("dt", "duration")
         if key in table
     }
+    times.update(_quantities(table, "simulation", {"gravity": "m/s**2"}, source))
     counts = {}
     for key in ("position_iterations", "velocity_iterations"):
         if key in table:

@@ -1,15 +1,29 @@
 """The test stand in MuJoCo: one hinge or slide joint on a fixed base, driven through the plugin.
 
 The scenario's rigid inertia becomes one body whose inertia about the joint axis is
-``joint.inertia`` (no gravity, no geoms, Euler integrator), so the DOF's unit response is exactly
-``1/inertia``. The drive is the ``drive_envelope.envelope`` plugin with all three inputs: the
-target position, the target velocity and the scenario's applied effort (PhysX's joint force,
-which counts as actuator effort). The external effort goes to ``qfrc_applied``: it is not
-actuator effort, so the envelope does not limit it.
+``joint.inertia`` (no geoms, Euler integrator), so the DOF's unit response is exactly
+``1/effective_inertia``: ``joint.armature`` is MuJoCo's ``armature`` (added to the joint-space
+inertia, as in PhysX). A ``[pendulum]`` gives the body the point mass at its centre of mass,
+``distance`` from the hinge (Z) and ``angle_offset`` from straight down, and the model gravity
+along -Y; without one there is no gravity. The drive is the ``drive_envelope.envelope`` plugin with
+all three inputs: the target position, the target velocity and the scenario's applied effort
+(PhysX's joint force, which counts as actuator effort). The external effort goes to
+``qfrc_applied``: it is not actuator effort, so the envelope does not limit it. A drive schedule
+writes the targets every step and zeroes the gains (``set_gains``) while the drive is unpowered.
 
 MuJoCo takes one step per ``dt`` with one implicit drive solve, which is what PhysX's PGS solver
 does for an isolated DOF. PhysX's TGS integrates and clamps per substep; a TGS scenario still runs
 here (same model, one solve per step) and its metadata says so.
+
+Joint friction is where the models differ. MuJoCo has one Coulomb friction, ``frictionloss``, so
+it needs ``static_friction == dynamic_friction`` (PhysX's break-away above sliding friction cannot
+be represented and is refused); it is a constraint, made hard here (``solreffriction = (2*dt, 1)``,
+``solimpfriction`` 0.9999) so a stopping joint sticks as in PhysX. Viscous friction becomes
+MuJoCo's joint ``damping`` (linear term), integrated implicitly. MuJoCo solves the actuators first
+and the constraints after, once: that is PhysX PGS with one position and no velocity iteration
+(drive, then friction), which it matches to ~1e-11 (``tests/test_mujoco_teststand.py``). With more
+iterations PhysX's drive sees the friction of the iteration before and answers it within the step;
+where the friction impulse per step is large against the joint's momentum, results then differ.
 """
 
 from __future__ import annotations
@@ -25,6 +39,7 @@ from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
@@ -68,6 +83,13 @@ def _check(scenario: Scenario) -> None:
             f"{where}: key 'joint.inertia' = {inertia!r}: the mujoco engine needs at least "
             f"{MIN_INERTIA:g} (MuJoCo's smallest inertia of a moving body)"
         )
+    friction = scenario.friction
+    if friction.static_friction != friction.dynamic_friction:
+        raise InputError(
+            f"{where}: key 'friction.static_friction' = {friction.static_friction!r}: the mujoco engine "
+            f"has one Coulomb friction (frictionloss) and needs it equal to friction.dynamic_friction "
+            f"({friction.dynamic_friction!r})"
+        )
     drive = scenario.drive
     for key, value in (("drive.stiffness", drive.stiffness), ("drive.damping", drive.damping)):
         if value > PARAM_BOUND:
@@ -92,18 +114,31 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
 
     spec = mujoco.MjSpec()
     spec.modelname = scenario.name or "teststand"
-    spec.option.timestep = scenario.simulation.dt
+    dt = scenario.simulation.dt
+    spec.option.timestep = dt
     spec.option.gravity = [0.0, 0.0, 0.0]
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     inertia = scenario.joint.inertia
     body = spec.worldbody.add_body(name="load", explicitinertial=True)
+    pendulum = scenario.pendulum
     if scenario.joint.type == "revolute":
         body.mass, body.inertia = 1.0, [inertia, inertia, inertia]
         joint_type = mujoco.mjtJoint.mjJNT_HINGE
     else:
         body.mass, body.inertia = inertia, [1.0, 1.0, 1.0]
         joint_type = mujoco.mjtJoint.mjJNT_SLIDE
-    body.add_joint(name="joint", type=joint_type, axis=[0.0, 0.0, 1.0])
+    if pendulum is not None:  # straight down (-Y, along gravity) at position = -angle_offset
+        offset, distance = pendulum.angle_offset, pendulum.distance
+        body.mass = pendulum.mass
+        body.ipos = [distance * math.sin(offset), -distance * math.cos(offset), 0.0]
+        spec.option.gravity = [0.0, -scenario.simulation.gravity, 0.0]
+    friction = scenario.friction
+    joint = body.add_joint(name="joint", type=joint_type, axis=[0.0, 0.0, 1.0])
+    joint.armature = scenario.joint.armature
+    joint.damping = [friction.viscous_friction, 0.0, 0.0]  # MuJoCo 4: linear, then higher-order terms
+    joint.frictionloss = friction.dynamic_friction
+    joint.solref_friction = [2.0 * dt, 1.0]
+    joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
     envelope, stiffness, damping, unlimited = _plugin_envelope(scenario)
     drive = add_drive(
         spec,
@@ -122,11 +157,22 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
     return spec, drive
 
 
-def simulate(scenario: Scenario) -> Trajectory:
-    """Run the scenario in MuJoCo with the plugin; ``steps + 1`` rows, row 0 the initial state."""
+def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Trajectory:
+    """Run the scenario in MuJoCo with the plugin; ``steps + 1`` rows, row 0 the initial state.
+
+    Args:
+        scenario: The scenario (SI).
+        schedule: Per-step drive targets and power state, or None for the scenario's targets.
+
+    Raises:
+        InputError: a scenario MuJoCo cannot represent, a schedule of the wrong length, or a
+            diverging simulation.
+    """
     import mujoco
 
     _check(scenario)
+    if schedule is not None:
+        schedule.check_steps(scenario.simulation.steps, _where(scenario))
     spec, drive = stand_spec(scenario)
     # MuJoCo resets a diverging simulation (|v| > 1e10) and goes on: stop with an error instead
     spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
@@ -152,6 +198,8 @@ def simulate(scenario: Scenario) -> Trajectory:
     position[0], velocity[0] = data.qpos[0], data.qvel[0]
     with _quiet_warnings():
         for i in range(1, count + 1):
+            if schedule is not None:
+                _command(model, data, drive, scenario, schedule, i - 1)
             mujoco.mj_step(model, data)
             _raise_on_warning(scenario, data, i)
             position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
@@ -165,6 +213,29 @@ def simulate(scenario: Scenario) -> Trajectory:
         name=scenario.name,
         metadata=_metadata(scenario),
     )
+
+
+def _command(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    drive: MjDrive,
+    scenario: Scenario,
+    schedule: DriveSchedule,
+    index: int,
+) -> None:
+    """Write step ``index``'s targets, and the drive's gains (0 while unpowered)."""
+    from drive_envelope._src.adapters.mujoco.params import get_gains, set_gains
+
+    drive.set_targets(
+        model,
+        data,
+        position=float(schedule.target_position[index]),
+        velocity=float(schedule.target_velocity[index]),
+    )
+    powered = bool(schedule.enabled[index])
+    if (get_gains(model, drive.name) != (0.0, 0.0)) != powered:
+        _, stiffness, damping, _ = _plugin_envelope(scenario)
+        set_gains(model, drive.name, stiffness=stiffness * powered, damping=damping * powered)
 
 
 @contextlib.contextmanager

@@ -9,8 +9,10 @@ population, log level ERROR, and the Omniverse client's and Warp's caches in
 ``<tmp>/drive-envelope-ovphysx-<uid>`` (never the repository or the user's home; PhysX's cooked
 colliders go to a process-private temp folder by default).
 
-Per step the runner writes the applied joint effort (``jointActuationForce``) and the external
-load (a link wrench: a torque about the joint axis, or a force along it), steps, and reads
+Per step the runner writes the applied joint effort (``jointActuationForce``), the external
+load (a link wrench: a torque about the joint axis, or a force along it) and, for a job with a
+drive schedule, the drive's targets (``jointPositionTarget``, ``jointVelocityTarget``) and gains
+(``jointStiffness``, ``jointDamping``: 0 while the drive is unpowered) where they change, steps, and reads
 ``jointPosition``, ``jointVelocity`` (degrees on revolute joints, converted to radians here) and
 ``jointProjectedForce``: the joint force the solver applied over the step, projected on the DOF.
 ovphysx 0.7 has no read of the drive's own force; on the test stand (centre of mass on the joint
@@ -80,6 +82,14 @@ class PhysxJob:
     """SI -> stage factor for efforts (1 for SI stages)."""
     length_scale: float = 1.0
     """SI -> stage factor for lengths (1 for SI stages)."""
+    target_position: npt.NDArray[np.float64] | None = None
+    """Drive target position per step, in ovphysx's units (deg or stage length), or None (the stage's)."""
+    target_velocity: npt.NDArray[np.float64] | None = None
+    """Drive target velocity per step (deg/s or stage length/s), or None."""
+    stiffness: npt.NDArray[np.float64] | None = None
+    """Drive stiffness per step in USD units (per degree on angular drives), or None."""
+    damping: npt.NDArray[np.float64] | None = None
+    """Drive damping per step in USD units, or None."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -336,16 +346,34 @@ def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
     wrench[5 if revolute else 0] = load
     samples = np.zeros((3, job.steps + 1))
     samples[:2, 0] = _sample(physx, _STATE[:2])
+    schedule = _schedule(job)
+    last: dict[str, float] = {}
     for i in range(1, job.steps + 1):
         _write(physx, joint_type, "jointActuationForce", JOINT_PATH, applied)
         if load != 0.0:
             _write(physx, link_type, "wrench", LINK_PATH, wrench)
+        for attribute, values in schedule.items():
+            value = float(values[i - 1])
+            if last.get(attribute) != value:  # properties and targets persist until re-written
+                _write(physx, joint_type, attribute, JOINT_PATH, _row(value))
+                last[attribute] = value
         physx.step_sync(job.dt)
         samples[:, i] = _sample(physx, _STATE)
     position, velocity, effort = samples / np.array([[coordinate], [coordinate], [job.effort_scale]])
     if revolute:
         position = _unwrap(position, velocity, job.dt)
     return PhysxResult(position=position, velocity=velocity, effort=effort)
+
+
+def _schedule(job: PhysxJob) -> dict[str, npt.NDArray[np.float64]]:
+    """The per-step joint writes of a job: ovphysx attribute -> one value per step."""
+    columns = {
+        "jointPositionTarget": job.target_position,
+        "jointVelocityTarget": job.target_velocity,
+        "jointStiffness": job.stiffness,
+        "jointDamping": job.damping,
+    }
+    return {name: values for name, values in columns.items() if values is not None}
 
 
 def _row(value: float) -> npt.NDArray[np.float32]:

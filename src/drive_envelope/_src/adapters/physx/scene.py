@@ -1,20 +1,26 @@
 """The test-stand scene as USD: one fixed-base articulation with one driven joint.
 
-Layout (``metersPerUnit`` / ``kilogramsPerUnit`` as given, Z up, no gravity)::
+Layout (``metersPerUnit`` / ``kilogramsPerUnit`` as given, Z up)::
 
-    /World/physicsScene        PhysicsScene + PhysxSceneAPI (solver type, step rate)
+    /World/physicsScene        PhysicsScene + PhysxSceneAPI (solver type, step rate, gravity)
     /World/stand               ArticulationRootAPI + PhysxArticulationAPI (iteration counts)
     /World/stand/base          rigid body, welded to the world by /World/stand/rootJoint
     /World/stand/link          rigid body: the scenario's inertia about Z (revolute) or its mass (prismatic)
-    /World/stand/joint         revolute about Z or prismatic along X, PhysicsDriveAPI + envelope
+    /World/stand/joint         revolute about Z or prismatic along X, PhysicsDriveAPI + envelope,
+                               PhysxJointAxisAPI (armature, friction)
 
-The link has zero linear and angular damping and ``cfmScale`` 0, and the joint no friction, no
-armature and no velocity cap, so the drive and the envelope are the only actuator physics. The
-link's centre of mass lies on the joint axis (at the joint frame): only then is PhysX's
-``jointProjectedForce``, which the runner logs, the drive + applied effort (with the centre of mass
-off the axis it also holds the reaction of the link's motion; see docs/usd.md). The
-envelope is authored with :func:`~drive_envelope._src.adapters.usd.authoring.write_envelope` (the same code
-path as ``drive-envelope usd apply``).
+The link has zero linear and angular damping and ``cfmScale`` 0 and the joint no velocity cap; the
+joint's armature and friction (``physxJointAxis:<axis>:armature``, ``staticFrictionEffort``,
+``dynamicFrictionEffort``, ``viscousFrictionCoefficient``, angular viscous friction per degree) are
+the scenario's, 0 unless it has them. Without a ``[pendulum]`` the scene has no gravity and the
+link's centre of mass lies on the joint axis (at the joint frame): then PhysX's
+``jointProjectedForce``, which the runner logs, is the drive + applied effort. With a pendulum the
+link carries the point mass (its mass; its centre of mass ``distance`` from the axis, at
+``angle_offset`` from straight down; the scenario's inertia about that centre) and the scene has
+gravity along -Y, perpendicular to the Z axis of the joint; the projected force then also holds the
+reaction of the link's motion, so the runner reports the drive effort another way (see the runner).
+The envelope is authored with :func:`~drive_envelope._src.adapters.usd.authoring.write_envelope`
+(the same code path as ``drive-envelope usd apply``).
 """
 
 from __future__ import annotations
@@ -67,7 +73,7 @@ def build_teststand_stage(
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     world = UsdGeom.Xform.Define(stage, "/World")
     stage.SetDefaultPrim(world.GetPrim())
-    _define_scene(stage, scenario)
+    _define_scene(stage, scenario, units)
     root = UsdGeom.Xform.Define(stage, ARTICULATION_PATH).GetPrim()
     UsdPhysics.ArticulationRootAPI.Apply(root)
     root.ApplyAPI("PhysxArticulationAPI")
@@ -93,11 +99,18 @@ def build_teststand_stage(
     revolute = scenario.joint.type == "revolute"
     mass_si = 1.0 if revolute else scenario.joint.inertia
     inertia_si = scenario.joint.inertia if revolute else 1.0
+    centre = (0.0, 0.0, 0.0)
+    pendulum = scenario.pendulum
+    if pendulum is not None:
+        # hanging straight down (-Y, along gravity) at position = -angle_offset
+        offset, distance = pendulum.angle_offset, pendulum.distance * units.length()
+        mass_si, centre = pendulum.mass, (distance * math.sin(offset), -distance * math.cos(offset), 0.0)
     _define_body(
         stage,
         LINK_PATH,
         mass=mass_si * units.mass(),
         inertia=(inertia_si * units.inertia(),) * 3,
+        centre=centre,
     )
     _define_joint(stage, scenario, units)
     if path is not None:
@@ -109,12 +122,16 @@ def _set(prim: Usd.Prim, name: str, type_name: object, value: object) -> None:
     prim.CreateAttribute(name, type_name, False).Set(value)
 
 
-def _define_scene(stage: Usd.Stage, scenario: Scenario) -> None:
+def _define_scene(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
     from pxr import Gf, Sdf, UsdPhysics
 
     scene = UsdPhysics.Scene.Define(stage, "/World/physicsScene")
-    scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, 0.0, -1.0))
-    scene.CreateGravityMagnitudeAttr().Set(0.0)
+    if scenario.pendulum is None:
+        scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, 0.0, -1.0))
+        scene.CreateGravityMagnitudeAttr().Set(0.0)
+    else:  # perpendicular to the revolute joint's Z axis
+        scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, -1.0, 0.0))
+        scene.CreateGravityMagnitudeAttr().Set(float(scenario.simulation.gravity * units.length()))
     prim = scene.GetPrim()
     prim.ApplyAPI("PhysxSceneAPI")
     sim = scenario.simulation
@@ -129,7 +146,14 @@ def _define_scene(stage: Usd.Stage, scenario: Scenario) -> None:
     _set(prim, "physxScene:broadphaseType", Sdf.ValueTypeNames.Token, "MBP")
 
 
-def _define_body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[float, float, float]) -> None:
+def _define_body(
+    stage: Usd.Stage,
+    path: str,
+    *,
+    mass: float,
+    inertia: tuple[float, float, float],
+    centre: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> None:
     from pxr import Gf, Sdf, UsdGeom, UsdPhysics
 
     prim = UsdGeom.Xform.Define(stage, path).GetPrim()
@@ -137,7 +161,7 @@ def _define_body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[flo
     mass_api = UsdPhysics.MassAPI.Apply(prim)
     mass_api.CreateMassAttr().Set(float(mass))
     mass_api.CreateDiagonalInertiaAttr().Set(Gf.Vec3f(*inertia))
-    mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(0.0, 0.0, 0.0))
+    mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(*centre))
     prim.ApplyAPI("PhysxRigidBodyAPI")
     # PhysX defaults: angular damping 0.05 and cfmScale 0.025 would add effort the drive model lacks
     _set(prim, "physxRigidBody:linearDamping", Sdf.ValueTypeNames.Float, 0.0)
@@ -167,8 +191,15 @@ def _define_joint(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> No
     inst = "angular" if revolute else "linear"
     # per-axis joint properties (PhysX reads PhysxJointAxisAPI before the older PhysxJointAPI)
     prim.ApplyAPI("PhysxJointAxisAPI", inst)
-    for name in ("armature", "staticFrictionEffort", "dynamicFrictionEffort", "viscousFrictionCoefficient"):
-        _set(prim, f"physxJointAxis:{inst}:{name}", Sdf.ValueTypeNames.Float, 0.0)
+    friction = scenario.friction
+    axis = {
+        "armature": scenario.joint.armature * (units.inertia() if revolute else units.mass()),
+        "staticFrictionEffort": friction.static_friction * units.effort(inst),
+        "dynamicFrictionEffort": friction.dynamic_friction * units.effort(inst),
+        "viscousFrictionCoefficient": friction.viscous_friction * units.per_speed(inst),  # per degree
+    }
+    for name, value in axis.items():
+        _set(prim, f"physxJointAxis:{inst}:{name}", Sdf.ValueTypeNames.Float, float(value))
     _set(prim, f"physxJointAxis:{inst}:maxJointVelocity", Sdf.ValueTypeNames.Float, _HUGE)
     spec = scenario.drive
     drive = UsdPhysics.DriveAPI.Apply(prim, inst)

@@ -2,9 +2,15 @@
 
 An engine is a module exposing ``simulate(scenario: Scenario) -> Trajectory``; one that also takes
 a keyword ``progress`` (a callable ``progress(done, total)`` it calls now and then with the steps
-done) gets the command line's progress bar. Modules are imported only when the engine is used, and
-each imports its simulator inside its functions, so the registry itself is light. A missing
-optional package gives one :class:`InputError` line naming the extra to install.
+done) gets the command line's progress bar, and one that takes a keyword ``schedule`` (a
+:class:`~drive_envelope._src.scenario.schedule.DriveSchedule`) can replay per-step drive
+commands. Modules are imported only when the engine is used, and each imports its simulator inside
+its functions, so the registry itself is light. A missing optional package gives one
+:class:`InputError` line naming the extra to install.
+
+The bench loads (a ``[pendulum]``, ``[friction]``, ``joint.armature``) are refused by an engine
+whose module does not list them in ``LOADS`` (a tuple of ``"pendulum"``, ``"friction"``,
+``"armature"``), so an engine that has not learnt one never silently drops it.
 
 Every run is bounded: :func:`simulate` refuses a scenario of more than ``max_steps`` steps
 (:data:`MAX_STEPS` unless raised) before any engine allocates its arrays (about 32 bytes a step).
@@ -22,12 +28,14 @@ from typing import TYPE_CHECKING
 from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
+    from drive_envelope._src.scenario.schedule import DriveSchedule
     from drive_envelope._src.scenario.spec import Scenario
     from drive_envelope._src.scenario.trajectory import Trajectory
 
 __all__ = [
     "ENGINES",
     "ENGINE_EXTRAS",
+    "LOADS",
     "MAX_STEPS",
     "ProgressCallback",
     "check_steps",
@@ -38,6 +46,9 @@ __all__ = [
 
 MAX_STEPS = 10**8
 """Most time steps one run takes unless ``max_steps`` (``--max-steps``) raises it: 3.2 GB of trajectory."""
+
+LOADS = ("pendulum", "friction", "armature")
+"""The bench loads an engine declares in its module's ``LOADS`` when it represents them."""
 
 ProgressCallback = Callable[[int, int], None]
 """``progress(done, total)``: called by an engine with the number of steps done so far."""
@@ -111,12 +122,39 @@ def check_steps(scenario: Scenario, max_steps: int = MAX_STEPS) -> int:
     return steps
 
 
+def scenario_loads(scenario: Scenario) -> tuple[str, ...]:
+    """The bench loads a scenario uses, among :data:`LOADS`."""
+    used = {
+        "pendulum": scenario.pendulum is not None,
+        "friction": scenario.friction.active or scenario.friction.dynamic_friction != 0.0,
+        "armature": scenario.joint.armature != 0.0,
+    }
+    return tuple(name for name in LOADS if used[name])
+
+
+def check_loads(scenario: Scenario, engine: str, module: ModuleType) -> None:
+    """Refuse a scenario whose bench loads the engine's module does not declare in ``LOADS``.
+
+    Raises:
+        InputError: naming the first load the engine does not represent.
+    """
+    supported = getattr(module, "LOADS", ())
+    for name in scenario_loads(scenario):
+        if name not in supported:
+            table = f"[{name}]" if name != "armature" else "joint.armature"
+            raise InputError(
+                f"--engine {engine}: this engine does not represent {table} yet; "
+                f"run the scenario on {', '.join(e for e in ('reference', 'physx', 'mujoco') if e != engine)}"
+            )
+
+
 def simulate(
     scenario: Scenario,
     engine: str = "reference",
     *,
     max_steps: int = MAX_STEPS,
     progress: ProgressCallback | None = None,
+    schedule: DriveSchedule | None = None,
 ) -> Trajectory:
     """Run ``scenario`` on ``engine`` and return its trajectory.
 
@@ -125,16 +163,25 @@ def simulate(
         engine: A name from :data:`ENGINES`.
         max_steps: Most steps allowed (the run is refused before it starts above it).
         progress: Called as ``progress(done, total)`` during the run by engines that support it.
+        schedule: Per-step drive targets and power state (one per step), or None for the
+            scenario's constant targets.
 
     Raises:
         InputError: more than ``max_steps`` steps, an unknown or unavailable engine (naming the
-            extra to install), or a scenario the engine cannot represent.
+            extra to install), a scenario the engine cannot represent, or a schedule for an engine
+            that cannot replay one.
     """
     check_steps(scenario, max_steps)
     module = engine_module(engine)
-    options = {}
-    if progress is not None and "progress" in inspect.signature(module.simulate).parameters:
+    check_loads(scenario, engine, module)
+    parameters = inspect.signature(module.simulate).parameters
+    options: dict[str, object] = {}
+    if progress is not None and "progress" in parameters:
         options["progress"] = progress
+    if schedule is not None:
+        if "schedule" not in parameters:
+            raise InputError(f"--engine {engine}: this engine cannot replay a drive schedule")
+        options["schedule"] = schedule
     try:
         result: Trajectory = module.simulate(scenario, **options)
     except ModuleNotFoundError as exc:

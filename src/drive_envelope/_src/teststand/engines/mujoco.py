@@ -6,14 +6,20 @@ and the built plugin (``python -m drive_envelope._src.adapters.mujoco.build``).
 
 from __future__ import annotations
 
+from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["simulate"]
+__all__ = ["LOADS", "simulate"]
+
+LOADS = ("pendulum", "friction", "armature")
+"""The bench loads this engine represents (see :mod:`drive_envelope._src.teststand.engines`)."""
 
 
-def simulate(scenario: Scenario) -> Trajectory:
+def simulate(scenario: Scenario, schedule: DriveSchedule | None = None) -> Trajectory:
     """Run ``scenario`` in MuJoCo with the ``drive_envelope.envelope`` plugin.
+
+    ``schedule`` gives per-step drive targets and power state (or None).
 
     Raises:
         PluginError: the plugin is not built or was built for another MuJoCo version (a
@@ -21,4 +27,4 @@ def simulate(scenario: Scenario) -> Trajectory:
     """
     from drive_envelope._src.adapters.mujoco.stand import simulate as run
 
-    return run(scenario)
+    return run(scenario, schedule=schedule)

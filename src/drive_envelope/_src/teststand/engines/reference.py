@@ -6,23 +6,38 @@ single joint on a fixed base (``physx/source/lowleveldynamics``):
 * drive parameters: ``computeImplicitDriveParams`` (``shared/DyCpuGpuArticulation.h``), set up once
   per step from the position error at the start of the step; TGS uses the substep ``stepDt`` for the
   spring and ``dt`` for the target-velocity offset;
-* each solver iteration runs the drive block of ``solveInternalJointConstraintRecursive``
-  (``src/DyFeatherstoneArticulation.cpp``): ``computeDriveImpulse`` with the accumulated impulse, the
-  joint's delta position and the elapsed time, then ``clampDriveImpulse`` on the TOTAL actuator
-  impulse (drive + applied joint effort), or the legacy ``+-maxForce`` clamp when ``maxEffort = 0``;
-* PGS (``DySolverCore.cpp``): applied and external efforts enter the velocity once over ``dt``; the
-  drive is recomputed and clamped every position and velocity iteration; the joint position
-  integrates with the velocity after the position iterations, ``q1 = q0 + v*dt``;
+* each solver iteration runs the per-DOF block of ``solveInternalJointConstraintRecursive``
+  (``src/DyFeatherstoneArticulation.cpp``) in its order: the drive (``computeDriveImpulse`` with the
+  accumulated impulse, the joint's delta position and the elapsed time, then ``clampDriveImpulse``
+  on the TOTAL actuator impulse, drive + applied joint effort, or the legacy ``+-maxForce`` clamp
+  when ``maxEffort = 0``), then joint friction (PhysX 5.6's model, ``computeFrictionImpulse``: the
+  impulse that stops the joint, friction accumulated this step included, kept whole below
+  ``staticFrictionEffort*dt`` and clipped to ``(dynamicFrictionEffort +
+  viscousFrictionCoefficient*|v|)*dt`` above it, with ``v`` the velocity after the drive); each
+  term's impulse changes the joint velocity before the next;
+* PGS (``DySolverCore.cpp``): applied and external efforts and gravity enter the velocity once
+  over ``dt``; drive and friction are recomputed every position and velocity iteration (their
+  impulses accumulate over the step); the joint position integrates with the velocity after the
+  position iterations, ``q1 = q0 + v*dt``;
 * TGS with external forces every substep (``DyTGSDynamics.cpp``, as PhysX runs through USD): each
-  position iteration is a substep that applies the efforts over ``stepDt``, clamps the substep's
-  drive impulse per step (``isPerStep``: budget ``maxEffort*stepDt``) and integrates the position;
-  each velocity iteration re-clamps the whole-step total at the current velocity without a new
-  drive request.
+  position iteration is a substep that applies the efforts and gravity over ``stepDt``
+  (``applyTgsSubstepForces``), clamps the substep's drive impulse per step (``isPerStep``: budget
+  ``maxEffort*stepDt``), solves friction per substep (budgets ``*stepDt``, nothing accumulated) and
+  integrates the position; each velocity iteration re-clamps the whole-step drive total at the
+  current velocity without a new drive request, then solves friction against the whole step's
+  accumulated friction impulse with budgets ``*dt``.
 
-Response ``r = 1/inertia`` (one link on a fixed base). Everything is float64; PhysX computes in
-float32, so results agree to float32 precision, not bit for bit. A drive law, drive request or state
-that overflows float64 (absurd gains, loads or inertias) stops the run with one :class:`InputError`
-line naming the time: a clamp fed an infinite request would otherwise give a finite, wrong effort.
+Gravity on a ``[pendulum]`` is an external effort evaluated at the start of the step
+(``computeLinkStates`` forms the link's gravity force once per step; TGS applies that force every
+substep). Its centripetal force is radial and adds nothing along a fixed revolute axis. Response
+``r = 1/(inertia + armature + pendulum m*d^2)`` (one link on a fixed base; armature adds to the
+joint-space inertia, ``computeArticulatedSpatialInertiaAndZ``). A :class:`DriveSchedule` gives
+per-step targets and power state (an unpowered step has zero drive gains).
+
+Everything is float64; PhysX computes in float32, so results agree to float32 precision, not bit
+for bit. A drive law, drive request or state that overflows float64 (absurd gains, loads or
+inertias) stops the run with one :class:`InputError` line naming the time: a clamp fed an infinite
+request would otherwise give a finite, wrong effort.
 """
 
 from __future__ import annotations
@@ -34,112 +49,38 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from drive_envelope._src.envelope.clamp import clamp_drive_impulse
-from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.loads import FrictionSpec
+from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.teststand.engines.solver_terms import (
+    ImplicitDriveDesc,
+    compute_drive_impulse,
+    compute_friction_impulse,
+    implicit_drive_desc,
+)
 
 __all__ = [
+    "LOADS",
     "ImplicitDriveDesc",
     "JointState",
     "compute_drive_impulse",
+    "compute_friction_impulse",
     "implicit_drive_desc",
     "simulate",
     "step",
 ]
+
+LOADS = ("pendulum", "friction", "armature")
+"""The bench loads this engine represents (see :mod:`drive_envelope._src.teststand.engines`)."""
 
 _PROGRESS_EVERY = 4096  # steps between progress reports
 
 
 class _Overflow(ArithmeticError):
     """A drive quantity overflowed float64 (the message names which)."""
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
-class ImplicitDriveDesc:
-    """PhysX ``ArticulationImplicitDriveDesc``: the linear law of the implicit drive for one step.
-
-    The unclamped drive impulse is ``accumulated*impulse_multiplier + v*vel_multiplier +
-    target_vel_plus_initial_bias - delta_position*bias_coefficient + elapsed*target_pos_bias``
-    [N*m*s or N*s].
-    """
-
-    target_vel_plus_initial_bias: float
-    """Constant term: damping toward the target velocity plus the initial spring error [N*m*s or N*s]."""
-    bias_coefficient: float
-    """Impulse per unit joint displacement within the step [N*m*s/rad or N*s/m]."""
-    vel_multiplier: float
-    """Impulse per unit joint velocity (negative) [N*m*s/(rad/s) or N*s/(m/s)]."""
-    impulse_multiplier: float
-    """Weight of the impulse accumulated so far: ``1 - x`` for PGS, 1 for TGS [-]."""
-    target_pos_bias: float
-    """Impulse per second of elapsed time (TGS: the target moves with the target velocity) [N*m or N]."""
-
-
-def implicit_drive_desc(
-    *,
-    drive_type: DriveType,
-    stiffness: float,
-    damping: float,
-    dt: float,
-    sim_dt: float,
-    response: float,
-    geom_error: float,
-    target_velocity: float,
-    is_tgs: bool,
-) -> ImplicitDriveDesc:
-    """Port of PhysX ``computeImplicitDriveParams`` (force and acceleration drives).
-
-    Args:
-        drive_type: ``"force"`` or ``"acceleration"``.
-        stiffness: Drive stiffness [N*m/rad or N/m] (force) or [1/s^2] (acceleration).
-        damping: Drive damping [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration).
-        dt: Step over which the spring is integrated: the substep for TGS, the step for PGS [s].
-        sim_dt: The simulation step [s].
-        response: Joint velocity change per unit impulse, ``1/inertia`` [rad/s/(N*m*s) or m/s/(N*s)].
-        geom_error: ``target_position - position`` at the start of the step [rad or m].
-        target_velocity: Drive target velocity [rad/s or m/s].
-        is_tgs: Whether the TGS solver runs the drive.
-    """
-    a = dt * (dt * stiffness + damping)
-    b = dt * (damping * target_velocity)
-    initial_bias = geom_error - (sim_dt - dt) * target_velocity  # equals geom_error for PGS
-    if drive_type == "force":
-        x = 1.0 / (1.0 + a * response) if response > 0.0 else 0.0
-        scale = 1.0
-    else:
-        x = 1.0 / (1.0 + a)
-        scale = 1.0 / response  # PhysX's recipResponse: the gains act per unit inertia
-    bias_coefficient = stiffness * x * scale * dt
-    return ImplicitDriveDesc(
-        target_vel_plus_initial_bias=x * b * scale + bias_coefficient * initial_bias,
-        bias_coefficient=bias_coefficient,
-        vel_multiplier=-x * a * scale,
-        impulse_multiplier=1.0 if is_tgs else 1.0 - x,
-        target_pos_bias=bias_coefficient * target_velocity if is_tgs else 0.0,
-    )
-
-
-def compute_drive_impulse(
-    desc: ImplicitDriveDesc, accumulated: float, joint_velocity: float, delta_position: float, elapsed: float
-) -> float:
-    """Port of PhysX ``computeDriveImpulse``: the unclamped drive impulse [N*m*s or N*s].
-
-    Args:
-        desc: The step's drive law.
-        accumulated: Drive impulse accumulated this step [N*m*s or N*s].
-        joint_velocity: Current joint velocity [rad/s or m/s].
-        delta_position: Joint displacement since the start of the step (TGS; 0 for PGS) [rad or m].
-        elapsed: Time elapsed in the step (TGS; 0 for PGS) [s].
-    """
-    return (
-        accumulated * desc.impulse_multiplier
-        + joint_velocity * desc.vel_multiplier
-        + desc.target_vel_plus_initial_bias
-        - delta_position * desc.bias_coefficient
-        + elapsed * desc.target_pos_bias
-    )
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -152,6 +93,8 @@ class JointState:
     """Joint velocity [rad/s or m/s]."""
     effort: float
     """Step-average total actuator effort: accumulated drive impulse / dt + applied effort [N*m or N]."""
+    friction: float = 0.0
+    """Step-average joint friction effort, friction impulse / dt [N*m or N]; not actuator effort."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -160,8 +103,21 @@ class _Setup:
 
     scenario: Scenario
     response: float
+    inertia: float  # PhysX's recipResponse (cfmScale 0)
     envelope: PerformanceEnvelope | None  # None: the envelope branch without limits (maxForce = inf)
     drive_off: bool  # maxEffort = 0: PhysX's legacy branch clamps the drive to +-0
+    friction: FrictionSpec | None  # None: PhysX's friction model is off (static = viscous = 0)
+    gravity: float  # m*g*d of the pendulum [N*m], 0 without one
+    angle_offset: float  # pendulum angle offset [rad]
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class _Command:
+    """The drive's targets and power state over one step."""
+
+    target_position: float
+    target_velocity: float
+    enabled: bool
 
 
 def _clamp_total(
@@ -212,17 +168,45 @@ def _solve_drive(
     return velocity + delta * setup.response, drive_impulse + delta
 
 
-def _desc(setup: _Setup, position: float, dt: float, sim_dt: float, is_tgs: bool) -> ImplicitDriveDesc:
+def _solve_friction(
+    setup: _Setup, velocity: float, friction_impulse: float, *, timestep: float, per_step: bool
+) -> tuple[float, float]:
+    """PhysX 5.6's joint friction after the drive; returns the new velocity and accumulated friction."""
+    friction = setup.friction
+    if friction is None:
+        return velocity, friction_impulse
+    accumulated = 0.0 if per_step else friction_impulse
+    total = compute_friction_impulse(
+        accumulated - velocity * setup.inertia,
+        friction.static_friction * timestep,
+        friction.dynamic_friction * timestep,
+        friction.viscous_friction * timestep,
+        velocity,
+    )
+    delta = total - accumulated
+    return velocity + delta * setup.response, friction_impulse + delta
+
+
+def _external(setup: _Setup, position: float) -> float:
+    """Efforts from outside the drive over the step: applied, external and gravity [N*m or N]."""
+    load = setup.scenario.load
+    gravity = -setup.gravity * math.sin(position + setup.angle_offset) if setup.gravity else 0.0
+    return load.applied_effort + load.external_effort + gravity
+
+
+def _desc(
+    setup: _Setup, command: _Command, position: float, dt: float, sim_dt: float, is_tgs: bool
+) -> ImplicitDriveDesc:
     drive = setup.scenario.drive
     desc = implicit_drive_desc(
         drive_type=drive.type,
-        stiffness=drive.stiffness,
-        damping=drive.damping,
+        stiffness=drive.stiffness if command.enabled else 0.0,
+        damping=drive.damping if command.enabled else 0.0,
         dt=dt,
         sim_dt=sim_dt,
         response=setup.response,
-        geom_error=drive.target_position - position,
-        target_velocity=drive.target_velocity,
+        geom_error=command.target_position - position,
+        target_velocity=command.target_velocity,
         is_tgs=is_tgs,
     )
     if not all(math.isfinite(getattr(desc, f.name)) for f in fields(desc)):
@@ -230,44 +214,49 @@ def _desc(setup: _Setup, position: float, dt: float, sim_dt: float, is_tgs: bool
     return desc
 
 
-def _pgs_step(setup: _Setup, position: float, velocity: float) -> JointState:
+def _pgs_step(setup: _Setup, command: _Command, position: float, velocity: float) -> JointState:
     sim, load = setup.scenario.simulation, setup.scenario.load
     dt = sim.dt
-    # computeUnconstrainedVelocities: joint force and external load act once over the whole step
-    velocity += setup.response * (load.applied_effort + load.external_effort) * dt
-    desc = _desc(setup, position, dt, dt, is_tgs=False)
-    impulse = 0.0
+    # computeUnconstrainedVelocities: joint force, external load and gravity act once over the step
+    velocity += setup.response * _external(setup, position) * dt
+    desc = _desc(setup, command, position, dt, dt, is_tgs=False)
+    impulse, friction = 0.0, 0.0
     for _ in range(sim.position_iterations):
         velocity, impulse = _solve_drive(
             setup, velocity, impulse, desc, delta_position=0.0, elapsed=0.0, timestep=dt,
             per_step=False, tgs_velocity_iteration=False,
         )  # fmt: skip
+        velocity, friction = _solve_friction(setup, velocity, friction, timestep=dt, per_step=False)
     position_velocity = velocity  # PGS integrates positions with the position-iteration velocity
     for _ in range(sim.velocity_iterations):
         velocity, impulse = _solve_drive(
             setup, velocity, impulse, desc, delta_position=0.0, elapsed=0.0, timestep=dt,
             per_step=False, tgs_velocity_iteration=False,
         )  # fmt: skip
+        velocity, friction = _solve_friction(setup, velocity, friction, timestep=dt, per_step=False)
     return JointState(
         position=position + position_velocity * dt,
         velocity=velocity,
         effort=impulse / dt + load.applied_effort,
+        friction=friction / dt,
     )
 
 
-def _tgs_step(setup: _Setup, position: float, velocity: float) -> JointState:
+def _tgs_step(setup: _Setup, command: _Command, position: float, velocity: float) -> JointState:
     sim, load = setup.scenario.simulation, setup.scenario.load
     dt = sim.dt
     step_dt = dt / sim.position_iterations
-    desc = _desc(setup, position, step_dt, dt, is_tgs=True)
-    impulse, delta_position, elapsed = 0.0, 0.0, 0.0
+    desc = _desc(setup, command, position, step_dt, dt, is_tgs=True)
+    external = _external(setup, position)  # gravity: the link's force from the start of the step
+    impulse, friction, delta_position, elapsed = 0.0, 0.0, 0.0, 0.0
     for _ in range(sim.position_iterations):
-        # applyTgsSubstepForces: joint force and external load act over each substep
-        velocity += setup.response * (load.applied_effort + load.external_effort) * step_dt
+        # applyTgsSubstepForces: joint force, external load and gravity act over each substep
+        velocity += setup.response * external * step_dt
         velocity, impulse = _solve_drive(
             setup, velocity, impulse, desc, delta_position=delta_position, elapsed=elapsed,
             timestep=step_dt, per_step=True, tgs_velocity_iteration=False,
         )  # fmt: skip
+        velocity, friction = _solve_friction(setup, velocity, friction, timestep=step_dt, per_step=True)
         delta_position += velocity * step_dt  # updateDeltaMotion
         elapsed += step_dt
     for _ in range(sim.velocity_iterations):
@@ -275,20 +264,43 @@ def _tgs_step(setup: _Setup, position: float, velocity: float) -> JointState:
             setup, velocity, impulse, desc, delta_position=delta_position, elapsed=elapsed,
             timestep=dt, per_step=False, tgs_velocity_iteration=True,
         )  # fmt: skip
+        velocity, friction = _solve_friction(setup, velocity, friction, timestep=dt, per_step=False)
     return JointState(
         position=position + delta_position,
         velocity=velocity,
         effort=impulse / dt + load.applied_effort,
+        friction=friction / dt,
     )
 
 
 def _setup(scenario: Scenario) -> _Setup:
     max_effort = scenario.drive.max_effort
+    pendulum = scenario.pendulum
+    inertia = scenario.effective_inertia
     return _Setup(
         scenario=scenario,
-        response=1.0 / scenario.joint.inertia,
+        response=1.0 / inertia,
+        inertia=inertia,
         envelope=scenario.effective_envelope(),
         drive_off=max_effort == 0.0,
+        friction=scenario.friction if scenario.friction.active else None,
+        gravity=(
+            pendulum.mass * scenario.simulation.gravity * pendulum.distance if pendulum is not None else 0.0
+        ),
+        angle_offset=pendulum.angle_offset if pendulum is not None else 0.0,
+    )
+
+
+def _command(scenario: Scenario, schedule: DriveSchedule | None, index: int) -> _Command:
+    if schedule is None:
+        drive = scenario.drive
+        return _Command(
+            target_position=drive.target_position, target_velocity=drive.target_velocity, enabled=True
+        )
+    return _Command(
+        target_position=float(schedule.target_position[index]),
+        target_velocity=float(schedule.target_velocity[index]),
+        enabled=bool(schedule.enabled[index]),
     )
 
 
@@ -296,7 +308,7 @@ def step(scenario: Scenario, position: float, velocity: float) -> JointState:
     """Advance the scenario's joint by one time step from ``(position, velocity)``.
 
     Args:
-        scenario: The scenario (drive, envelope, load, solver settings).
+        scenario: The scenario (drive, envelope, loads, friction, solver settings).
         position: Joint position at the start of the step [rad or m].
         velocity: Joint velocity at the start of the step [rad/s or m/s].
 
@@ -308,21 +320,23 @@ def step(scenario: Scenario, position: float, velocity: float) -> JointState:
     """
     setup = _setup(scenario)
     advance = _tgs_step if scenario.simulation.solver == "tgs" else _pgs_step
+    command = _command(scenario, None, 0)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the state is checked finite
-        return _advance(scenario, setup, advance, float(position), float(velocity), 0.0)
+        return _advance(scenario, setup, advance, command, float(position), float(velocity), 0.0)
 
 
 def _advance(
     scenario: Scenario,
     setup: _Setup,
-    advance: Callable[[_Setup, float, float], JointState],
+    advance: Callable[[_Setup, _Command, float, float], JointState],
+    command: _Command,
     position: float,
     velocity: float,
     time: float,
 ) -> JointState:
     """One step, with every overflow turned into one line naming the time [s]."""
     try:
-        state = advance(setup, position, velocity)
+        state = advance(setup, command, position, velocity)
     except (_Overflow, ZeroDivisionError, OverflowError) as exc:
         what = str(exc) if isinstance(exc, _Overflow) else "a drive quantity"
         raise _overflow_error(scenario, what, time) from None
@@ -339,23 +353,33 @@ def _overflow_error(scenario: Scenario, what: str, time: float) -> InputError:
     )
 
 
-def simulate(scenario: Scenario, *, progress: Callable[[int, int], None] | None = None) -> Trajectory:
+def simulate(
+    scenario: Scenario,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    schedule: DriveSchedule | None = None,
+) -> Trajectory:
     """Run the whole scenario with the reference model.
 
     Args:
         scenario: The scenario.
         progress: Called as ``progress(done, total)`` every few thousand steps and at the end.
+        schedule: Per-step drive targets and power state replacing the scenario's constant targets
+            (one entry per step), or None.
 
     Returns:
         ``steps + 1`` rows: the initial state (effort 0) and the state after each step.
 
     Raises:
-        InputError: a drive quantity or the state overflows float64.
+        InputError: a drive quantity or the state overflows float64, or a schedule whose length is
+            not the number of steps.
     """
     setup = _setup(scenario)
     sim = scenario.simulation
     advance = _tgs_step if sim.solver == "tgs" else _pgs_step
     count = sim.steps
+    if schedule is not None:
+        schedule.check_steps(count, f"scenario {scenario.name!r}")
     time = np.arange(count + 1, dtype=np.float64) * sim.dt
     position = np.empty(count + 1)
     velocity = np.empty(count + 1)
@@ -364,7 +388,10 @@ def simulate(scenario: Scenario, *, progress: Callable[[int, int], None] | None 
     # every state is checked finite, so NumPy's overflow warnings would only repeat the error
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         for i in range(count):
-            state = _advance(scenario, setup, advance, float(position[i]), float(velocity[i]), float(time[i]))
+            command = _command(scenario, schedule, i)
+            state = _advance(
+                scenario, setup, advance, command, float(position[i]), float(velocity[i]), float(time[i])
+            )
             position[i + 1], velocity[i + 1], effort[i + 1] = state.position, state.velocity, state.effort
             if progress is not None and (i + 1) % _PROGRESS_EVERY == 0:
                 progress(i + 1, count)

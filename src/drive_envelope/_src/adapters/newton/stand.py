@@ -1,0 +1,247 @@
+"""The test stand in Newton: one revolute or prismatic joint on a fixed base, Featherstone, implicit.
+
+The scenario's rigid inertia becomes one link whose inertia about the joint axis (X) is
+``joint.inertia``, with ``joint.armature`` as Newton's joint armature, so the DOF's unit response is
+``1/(inertia + armature)``. A ``[pendulum]`` point mass is folded into the same link (mass, centre
+of mass off the axis, inertia about it) under gravity along -Z, so gravity's effort is
+``-m*g*d*sin(q + angle_offset)``; without one the stand has no gravity.
+The drive is Newton's own actuator stack: ``DrivePD`` (stiffness, damping, the scenario's applied
+effort as its feed-forward ``joint_act``, which PhysX counts as actuator effort) clamped by
+:class:`ClampingPerformanceEnvelope`, in Newton's implicit effort mode: the PD law and the clamp are
+solved at the end-of-step velocity and position, as PhysX's implicit drive and ``clampDriveImpulse``
+are. The external effort is not actuator effort: it is added to ``joint_f`` after the actuator.
+The implicit solve gets the forces from outside the actuator as ``bias_force`` (gravity from
+:class:`~drive_envelope._src.adapters.newton.bias.BiasForce`, minus the external effort), so it
+predicts the end-of-step velocity the solver will reach. PhysX's joint friction has no Newton
+counterpart in Featherstone: a scenario with ``[friction]`` is refused.
+
+``SolverFeatherstone`` integrates semi-implicitly (``v1 = v0 + a*dt``, ``q1 = q0 + v1*dt``): one
+solve per step, what PhysX's PGS does for an isolated DOF. A TGS scenario still runs here (one solve
+per step) and its metadata says so. Newton computes in float32 (the implicit solve in float64).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory
+
+__all__ = ["MAX_VALUE", "MIN_INERTIA", "simulate"]
+
+MIN_INERTIA = 1e-12
+"""Smallest inertia [kg*m^2 or kg] the stand accepts: Newton inverts the float32 mass matrix."""
+MAX_VALUE = 1e30
+"""Largest gain, effort or envelope slope (SI) the stand accepts: Newton stores them in float32."""
+_SOLVE_TOLERANCE = 1e-10
+"""Absolute residual and update tolerance of Newton's implicit solve [N*m*s or N*s]: Newton's 1e-5
+default halts the approach to the speed limit short of it; this converges to float precision."""
+_SOLVE_ITERATIONS = 32
+"""Most iterations of the implicit solve per step (Newton's default 8)."""
+
+
+def _where(scenario: Scenario) -> str:
+    return f"scenario {scenario.name!r}" if scenario.name else "scenario"
+
+
+def _check(scenario: Scenario) -> None:
+    """Refuse what Newton's float32 model cannot hold, naming the scenario key (before building)."""
+    where = _where(scenario)
+    if scenario.friction.active:
+        raise InputError(
+            f"{where}: [friction]: the newton engine has no PhysX joint friction model (Featherstone "
+            "ignores joint_friction); run it on the reference, mujoco or physx engine"
+        )
+    if scenario.joint.inertia < MIN_INERTIA:
+        raise InputError(
+            f"{where}: key 'joint.inertia' = {scenario.joint.inertia!r}: the newton engine needs at "
+            f"least {MIN_INERTIA:g} (Newton inverts its float32 mass matrix)"
+        )
+    values = {
+        "drive.stiffness": scenario.drive.stiffness,
+        "drive.damping": scenario.drive.damping,
+        "load.applied_effort": abs(scenario.load.applied_effort),
+        "load.external_effort": abs(scenario.load.external_effort),
+    }
+    envelope = scenario.effective_envelope()
+    if envelope is not None:
+        for field in ENVELOPE_FIELDS:
+            values[f"envelope.{field}"] = getattr(envelope, field)
+    for key, value in values.items():
+        if math.isfinite(value) and value > MAX_VALUE:
+            raise InputError(
+                f"{where}: key {key!r} = {value!r}: the newton engine takes at most {MAX_VALUE:g} (SI, "
+                "Newton stores it in float32)"
+            )
+
+
+def _gains(scenario: Scenario) -> tuple[float, float]:
+    """``(kp, kd)`` of Newton's force-type PD: PhysX's acceleration drive scales by the inertia."""
+    drive = scenario.drive
+    if drive.max_effort == 0.0:
+        return 0.0, 0.0  # PhysX: maxForce = 0 turns the drive off
+    scale = scenario.joint.inertia if drive.type == "acceleration" else 1.0
+    return drive.stiffness * scale, drive.damping * scale
+
+
+def _clamping(scenario: Scenario, clamp_class: type) -> list[tuple[type, dict[str, float]]]:
+    """The envelope clamp of the stand's drive; none for a drive that is off or unlimited."""
+    envelope = scenario.effective_envelope()
+    if scenario.drive.max_effort == 0.0 or envelope is None:
+        return []  # off: the applied effort passes unlimited; unlimited: PhysX skips the clamp
+    return [(clamp_class, {field: float(getattr(envelope, field)) for field in ENVELOPE_FIELDS})]
+
+
+def _build(scenario: Scenario) -> Any:
+    """The stand as a finalized ``newton.Model`` with one actuator on DOF 0."""
+    import newton
+    import warp as wp
+    from newton.actuators import DrivePD
+
+    from drive_envelope._src.adapters.newton.clamp import build
+
+    pendulum = scenario.pendulum
+    gravity = scenario.simulation.gravity if pendulum is not None else 0.0
+    builder = newton.ModelBuilder(gravity=(0.0, 0.0, -gravity))
+    inertia, armature = scenario.joint.inertia, scenario.joint.armature
+    if scenario.joint.type == "revolute":
+        mass, com, about_com = _link(inertia, pendulum)
+        link = builder.add_link(mass=mass, com=wp.vec3(*com), inertia=wp.mat33(np.eye(3) * about_com))
+        joint = builder.add_joint_revolute(
+            parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
+        )
+    else:
+        link = builder.add_link(mass=inertia, inertia=wp.mat33(np.eye(3)))
+        joint = builder.add_joint_prismatic(
+            parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
+        )
+    builder.add_articulation([joint])
+    kp, kd = _gains(scenario)
+    builder.add_actuator(DrivePD, index=0, kp=kp, kd=kd, clamping=_clamping(scenario, build()))
+    return builder.finalize(device="cpu")
+
+
+def _link(inertia: float, pendulum: Any) -> tuple[float, tuple[float, float, float], float]:
+    """Mass, centre of mass (joint frame, q = 0) and inertia about it of the revolute stand's link.
+
+    The link is the scenario's rigid inertia (1 kg on the axis) plus the pendulum's point mass m at
+    d, hanging straight down (-Z) at ``q = -angle_offset``: total mass M = 1 + m, centre of mass at
+    ``c = m*d/M``, inertia about it ``inertia + m*d^2 - M*c^2`` so that the inertia about the axis
+    is ``inertia + m*d^2``, and gravity's effort about X is ``-m*g*d*sin(q + angle_offset)``.
+    """
+    if pendulum is None:
+        return 1.0, (0.0, 0.0, 0.0), inertia
+    mass = 1.0 + pendulum.mass
+    reach = pendulum.mass * pendulum.distance / mass
+    offset = pendulum.angle_offset
+    com = (0.0, reach * math.sin(offset), -reach * math.cos(offset))
+    return mass, com, inertia + pendulum.inertia - mass * reach**2
+
+
+def _array(value: float) -> Any:
+    import warp as wp
+
+    return wp.array(np.array([value], dtype=np.float32), dtype=wp.float32, device="cpu")
+
+
+def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> Trajectory:
+    """Run ``scenario`` on Newton (Featherstone, implicit actuator); ``steps + 1`` rows, row 0 the start.
+
+    Args:
+        scenario: The validated scenario.
+        progress: Called as ``progress(done, total)`` every 1000 steps and at the end.
+
+    Raises:
+        InputError: a value Newton's float32 model cannot hold, or a state that diverged.
+    """
+    from drive_envelope._src.adapters.newton.warp_setup import quiet_warp
+
+    _check(scenario)
+    with quiet_warp():
+        return _run(scenario, progress)
+
+
+def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Trajectory:
+    """Build the stand and step it (inside :func:`quiet_warp`)."""
+    import newton
+    from newton.actuators import Actuator, JointSpaceResponse
+
+    from drive_envelope._src.adapters.newton.bias import BiasForce
+
+    model = _build(scenario)
+    actuator = model.actuators[0]
+    response = JointSpaceResponse(model)
+    actuator.set_effort_mode_implicit(
+        response=response,
+        options=Actuator.ImplicitOptions(
+            max_iters=_SOLVE_ITERATIONS, residual_tol=_SOLVE_TOLERANCE, update_tol=_SOLVE_TOLERANCE
+        ),
+    )
+    solver = newton.solvers.SolverFeatherstone(model)
+    state_in, state_out, control = model.state(), model.state(), model.control()
+    state_in.joint_q.assign(np.array([scenario.joint.initial_position], dtype=np.float32))
+    state_in.joint_qd.assign(np.array([scenario.joint.initial_velocity], dtype=np.float32))
+    newton.eval_fk(model, state_in.joint_q, state_in.joint_qd, state_in)
+    control.joint_target_q.assign(np.array([scenario.drive.target_position], dtype=np.float32))
+    control.joint_target_qd.assign(np.array([scenario.drive.target_velocity], dtype=np.float32))
+    control.joint_act.assign(np.array([scenario.load.applied_effort], dtype=np.float32))
+    external = scenario.load.external_effort
+    load = _array(external)
+    bias = BiasForce(model, coriolis=False)  # one DOF on a fixed base: no Coriolis force
+    count = scenario.simulation.steps
+    dt = scenario.simulation.dt
+    position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
+    position[0], velocity[0] = scenario.joint.initial_position, scenario.joint.initial_velocity
+    for i in range(1, count + 1):
+        control.joint_f.zero_()
+        response.refresh(state_in)
+        # the manipulator equation's bias (tau = M qdd + b): gravity, minus the load from outside
+        actuator.step(state_in, control, dt=dt, bias_force=bias.compute(state_in, external=load))
+        effort[i] = float(control.joint_f.numpy()[0])
+        control.joint_f.assign(np.array([effort[i] + external], dtype=np.float32))
+        solver.step(state_in, state_out, control, None, dt)  # type: ignore[arg-type]  # no contacts
+        state_in, state_out = state_out, state_in
+        position[i] = float(state_in.joint_q.numpy()[0])
+        velocity[i] = float(state_in.joint_qd.numpy()[0])
+        if not (math.isfinite(position[i]) and math.isfinite(velocity[i])):
+            raise InputError(
+                f"{_where(scenario)}: Newton's state diverged at step {i} (t = {i * dt:.6g} s): "
+                "check dt, inertia, gains and loads"
+            )
+        if progress is not None and (i % 1000 == 0 or i == count):
+            progress(i, count)
+    return Trajectory(
+        time=np.arange(count + 1, dtype=np.float64) * dt,
+        position=position,
+        velocity=velocity,
+        effort=effort,
+        joint=scenario.joint.type,
+        engine="newton",
+        name=scenario.name,
+        metadata=_metadata(scenario),
+    )
+
+
+def _metadata(scenario: Scenario) -> dict[str, object]:
+    import newton
+
+    sim = scenario.simulation
+    note = "Featherstone, implicit actuator: one implicit drive solve per step (PhysX PGS, isolated DOF)"
+    if sim.solver == "tgs":
+        note += "; PhysX TGS integrates and clamps per substep, so transients differ"
+    return {
+        "solver": sim.solver,
+        "dt": sim.dt,
+        "newton_version": str(newton.__version__),
+        "newton_solver": "SolverFeatherstone",
+        "effort_mode": "implicit",
+        "clamp": "ClampingPerformanceEnvelope",
+        "note": note,
+        "unlimited_effort": math.isinf(scenario.drive.max_effort),
+    }

@@ -1,0 +1,173 @@
+"""``drive-envelope identify TRAIN_LOG... --stand STAND``: the envelope (and more) a bench implies."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from drive_envelope._src.cli.common import (
+    add_force_argument,
+    add_format_argument,
+    add_output_argument,
+    integer_at_least,
+)
+
+_PARAMETERS = (
+    "max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient, stiffness, "
+    "damping, static_friction, dynamic_friction, viscous_friction, armature, angle_offset"
+)
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (value >= 0.0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``identify`` command."""
+    parser = subparsers.add_parser(
+        "identify",
+        help="estimate the envelope (and drive, friction, armature) from bench logs",
+        description=(
+            "Replay bench logs (time, position, target_position; optional velocity, effort, "
+            "target_velocity, torque_enable) through the reference test stand of the stand file and "
+            "search the parameters that make the simulated positions match the measured ones "
+            "(differential evolution over batched replays, then a least-squares polish). Prints the "
+            "parameters with their standard deviations and the mean absolute position error per log; "
+            "writes the identified envelope (-o) and a figure (--plot). Needs SciPy (the identify extra)."
+        ),
+    )
+    parser.add_argument("train", nargs="+", metavar="TRAIN_LOG", help="training logs (.csv, .parquet)")
+    parser.add_argument("--stand", required=True, metavar="STAND", help="stand file (scenario + [pendulum])")
+    parser.add_argument(
+        "--validate", nargs="+", default=[], metavar="LOG", help="held-out logs, replayed with the result"
+    )
+    parser.add_argument(
+        "--fit",
+        default=None,
+        metavar="NAME,...",
+        help=f"parameters to estimate, comma-separated (default: the four envelope ones); from {_PARAMETERS}",
+    )
+    parser.add_argument(
+        "--engine",
+        choices=("reference", "physx", "mujoco"),
+        default="reference",
+        help="also replay the result in physx (real PhysX, ovphysx) or mujoco and report its error",
+    )
+    add_format_argument(parser, ("text", "json"), "the report as text or as one JSON object (SI)")
+    add_output_argument(parser, "write the identified envelope file (.toml or .json), atomically")
+    parser.add_argument("--plot", metavar="FIG", default=None, help="write the figure (.png, .svg or .pdf)")
+    parser.add_argument(
+        "--generations",
+        type=integer_at_least(0),
+        default=60,
+        metavar="N",
+        help="most search generations (default 60)",
+    )
+    parser.add_argument(
+        "--population",
+        type=integer_at_least(1, 1000),
+        default=10,
+        metavar="N",
+        help="candidates per generation per fitted parameter (default 10)",
+    )
+    parser.add_argument(
+        "--velocity-weight",
+        type=_nonnegative,
+        default=0.0,
+        metavar="S",
+        help="weight of the velocity error in the cost, in seconds (default 0: position only)",
+    )
+    parser.add_argument(
+        "--seed", type=integer_at_least(0), default=0, metavar="N", help="random seed (default 0)"
+    )
+    add_force_argument(parser)
+    parser.set_defaults(func=_run)
+
+
+def _fit_names(text: str | None) -> list[str]:
+    from drive_envelope._src.errors import InputError
+    from drive_envelope._src.identify.parameters import DEFAULT_FIT
+
+    if text is None:
+        return list(DEFAULT_FIT)
+    names = [name.strip() for name in text.split(",")]
+    if not all(names):
+        raise InputError(f"--fit {text!r}: expected comma-separated parameter names, e.g. max_effort,damping")
+    return names
+
+
+def _run(args: argparse.Namespace) -> int:
+    import json
+    import warnings
+
+    from drive_envelope._src.cli.common import Progress, checked_output, status, warn
+    from drive_envelope._src.identify.optimize import SearchOptions
+    from drive_envelope._src.identify.report import identification_text, identification_to_dict
+    from drive_envelope._src.identify.run import identify
+    from drive_envelope._src.identify.stand import StandWarning
+
+    output = checked_output(args.output)
+    plot = checked_output(args.plot, "--plot")
+    if output is not None:
+        _check_envelope_path(output)
+    if plot is not None:
+        from drive_envelope._src.plots.figure import check_figure_path
+
+        check_figure_path(plot, "--plot")  # before the search, which takes a while
+    options = SearchOptions(
+        generations=args.generations,
+        population=args.population,
+        velocity_weight=args.velocity_weight,
+        seed=args.seed,
+    )
+    progress = Progress("identify")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", StandWarning)
+        try:
+            result = identify(
+                args.train,
+                args.stand,
+                validate=args.validate,
+                fit=_fit_names(args.fit),
+                options=options,
+                engine=args.engine,
+                progress=progress,
+            )
+        finally:
+            progress.close()
+    for item in caught:
+        if issubclass(item.category, StandWarning):
+            warn(str(item.message))
+    for note in result.notes:
+        warn(note)
+    if output is not None:
+        from drive_envelope._src.io.envelope_file import save_envelope
+
+        save_envelope(result.envelope, output, force=args.force)
+    if plot is not None:
+        from drive_envelope._src.identify.plot import save_identification_figure
+
+        save_identification_figure(result, plot, force=args.force)
+    if args.format == "json":
+        print(json.dumps(identification_to_dict(result), indent=2))
+    else:
+        print(identification_text(result))
+    for path in (output, plot):
+        if path is not None:
+            status(f"wrote {path}")
+    return 0
+
+
+def _check_envelope_path(path: str) -> None:
+    from pathlib import Path
+
+    from drive_envelope._src.errors import InputError
+
+    if Path(path).suffix.lower() not in (".toml", ".json"):
+        raise InputError(f"--output {path!r}: expected an envelope file name ending in .toml or .json")

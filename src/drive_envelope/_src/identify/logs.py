@@ -1,0 +1,279 @@
+"""Bench logs for identification: a joint's measured motion and the commands that caused it.
+
+A log is a CSV (``.csv``, ``.tsv``, ``.txt``, optionally ``.gz``; ``#`` comment lines before the
+header are skipped) or Parquet file (needs pyarrow) with the columns
+
+========================  ===========  =========================================================
+``time``                  required     sample time [s], on a uniform grid (the replay's step)
+``position``              required     measured joint position [rad or m]
+``target_position``       required     the drive's goal written at that sample [rad or m]
+``velocity``              optional     measured joint velocity [rad/s or m/s] (initial state, MAE)
+``effort``                optional     measured actuator effort [N*m or N] (plotted only)
+``target_velocity``       optional     drive target velocity [rad/s or m/s]; 0 when absent
+``torque_enable``         optional     1 = drive powered, 0 = unpowered (free swing); 1 when absent
+========================  ===========  =========================================================
+
+Other columns are ignored. Sample ``i``'s commands act from ``time[i]`` to ``time[i + 1]``. A JSON
+sidecar beside the log (``NAME.json`` for ``NAME.csv``) may give ``kp_duty_per_rad``, the servo
+firmware's position gain as PWM duty per radian of error (a voltage-driven servo such as a
+Dynamixel: see :mod:`drive_envelope._src.identify.stand`); other sidecar keys are ignored.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import io
+import json
+import math
+import os
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope._src.errors import InputError
+
+__all__ = ["COLUMNS", "BenchLog", "read_bench_log"]
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+COLUMNS = ("time", "position", "target_position", "velocity", "effort", "target_velocity", "torque_enable")
+"""Columns a bench log may have, required ones first."""
+_REQUIRED = COLUMNS[:3]
+_GRID_TOLERANCE = 0.01  # a time step may differ from the median step by 1 %
+_PARQUET = (".parquet", ".pq")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class BenchLog:
+    """One bench log, SI, every array of one length (``rows``)."""
+
+    path: str
+    """The file it was read from."""
+    time: FloatArray
+    """Sample times [s]."""
+    position: FloatArray
+    """Measured joint position [rad or m]."""
+    target_position: FloatArray
+    """Drive target position at each sample [rad or m]."""
+    target_velocity: FloatArray
+    """Drive target velocity [rad/s or m/s] (zeros when the log has none)."""
+    enabled: BoolArray
+    """Drive powered at each sample (``torque_enable``; all True when absent)."""
+    velocity: FloatArray | None = None
+    """Measured joint velocity [rad/s or m/s], or None."""
+    effort: FloatArray | None = None
+    """Measured actuator effort [N*m or N], or None."""
+    duty_per_rad: float | None = None
+    """Servo gain as PWM duty per radian from the sidecar (``kp_duty_per_rad``) [1/rad], or None."""
+
+    @property
+    def name(self) -> str:
+        """The file name, which reports key results by."""
+        return Path(self.path).name
+
+    @property
+    def rows(self) -> int:
+        """Number of samples."""
+        return int(self.time.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """The sampling step, the replay's time step [s]."""
+        return float(np.median(np.diff(self.time)))
+
+
+def read_bench_log(path: str | os.PathLike[str]) -> BenchLog:
+    """Read a bench log (CSV or Parquet) and its optional JSON sidecar.
+
+    Raises:
+        InputError: a missing file or column, a cell that is not a finite number (naming the row
+            and column), fewer than 3 rows, a time column off a uniform grid, a ``torque_enable``
+            other than 0/1, or a sidecar that is not a JSON object with a positive
+            ``kp_duty_per_rad``.
+    """
+    file = Path(path)
+    label = str(file)
+    if file.is_dir():
+        raise InputError(f"{label}: is a folder; expected a bench log file")
+    if not file.is_file():
+        raise InputError(f"{label}: no such file")
+    if file.suffix.lower() in _PARQUET:
+        columns = _read_parquet(file, label)
+    else:
+        columns = _read_csv(file, label)
+    rows = columns["time"].shape[0]
+    if rows < 3:
+        raise InputError(f"{label}: {rows} data rows; expected at least 3 samples")
+    _check_grid(columns["time"], label)
+    enable = columns.get("torque_enable")
+    if enable is not None and not np.isin(enable, (0.0, 1.0)).all():
+        row = int(np.flatnonzero(~np.isin(enable, (0.0, 1.0)))[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column 'torque_enable': got {float(enable[row])!r}; expected 0 or 1"
+        )
+    return BenchLog(
+        path=label,
+        time=columns["time"],
+        position=columns["position"],
+        target_position=columns["target_position"],
+        target_velocity=columns.get("target_velocity", np.zeros(rows)),
+        enabled=(enable != 0.0) if enable is not None else np.ones(rows, dtype=np.bool_),
+        velocity=columns.get("velocity"),
+        effort=columns.get("effort"),
+        duty_per_rad=_sidecar_duty(file),
+    )
+
+
+def _plan(header: list[str], label: str) -> dict[str, int]:
+    """Column index of each known column; a name twice (up to case) or a missing required one is an error."""
+    plan: dict[str, int] = {}
+    lowered = [name.strip().lower() for name in header]
+    for column in COLUMNS:
+        hits = [i for i, name in enumerate(lowered) if name == column]
+        if len(hits) > 1:
+            raise InputError(
+                f"{label}: column {column!r} is ambiguous: the header names it {len(hits)} times"
+            )
+        if hits:
+            plan[column] = hits[0]
+    missing = [column for column in _REQUIRED if column not in plan]
+    if missing:
+        raise InputError(
+            f"{label}: missing column(s) {', '.join(map(repr, missing))}; a bench log needs "
+            f"{', '.join(_REQUIRED)} (optional: {', '.join(COLUMNS[3:])}); found {', '.join(header)}"
+        )
+    return plan
+
+
+def _open_text(file: Path) -> Any:
+    if file.suffix.lower() == ".gz":
+        return io.TextIOWrapper(gzip.open(file, "rb"), encoding="utf-8-sig", newline="")
+    return open(file, encoding="utf-8-sig", newline="")  # -sig: skip a byte-order mark
+
+
+def _read_csv(file: Path, label: str) -> dict[str, FloatArray]:
+    try:
+        with _open_text(file) as handle:
+            lines = [line for line in handle if line.strip() and not line.lstrip().startswith("#")]
+    except (OSError, EOFError, UnicodeDecodeError, zlib.error) as exc:
+        raise InputError(f"{label}: cannot read: {' '.join(str(exc).split())}") from None
+    if not lines:
+        raise InputError(f"{label}: empty file (expected a header line naming the columns, then rows)")
+    delimiter = max((",", ";", "\t"), key=lines[0].count)
+    try:
+        header, *rows = [fields for fields in csv.reader(lines, delimiter=delimiter) if fields]
+    except csv.Error as exc:
+        raise InputError(f"{label}: cannot read as CSV: {' '.join(str(exc).split())}") from None
+    plan = _plan([name.strip() for name in header], label)
+    width = max(plan.values()) + 1
+    for row, fields in enumerate(rows, start=1):
+        if len(fields) < width:
+            raise InputError(f"{label}: row {row}: {len(fields)} fields, the header has {len(header)}")
+    return {
+        column: _numbers([fields[index] for fields in rows], column, label) for column, index in plan.items()
+    }
+
+
+def _numbers(cells: list[str], column: str, label: str) -> FloatArray:
+    try:
+        values = np.array(cells, dtype=np.float64)
+    except ValueError:
+        for row, cell in enumerate(cells, start=1):
+            try:
+                float(cell)
+            except ValueError:
+                what = "an empty cell" if not cell.strip() else repr(cell)
+                raise InputError(
+                    f"{label}: row {row}, column {column!r}: got {what}; expected a number"
+                ) from None
+        raise
+    _check_finite(values, column, label)
+    return values
+
+
+def _check_finite(values: FloatArray, column: str, label: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InputError(
+            f"{label}: row {int(bad[0]) + 1}, column {column!r}: got {float(values[bad[0]])!r}; "
+            "expected a finite number"
+        )
+
+
+def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise InputError(
+            f"{label}: reading Parquet needs pyarrow (pip install 'drive-envelope[parquet]')"
+        ) from None
+    try:
+        table = pq.read_table(file)
+    except (OSError, pa.ArrowException) as exc:
+        raise InputError(f"{label}: cannot read as Parquet: {' '.join(str(exc).split())}") from None
+    plan = _plan(list(table.column_names), label)
+    columns = {}
+    for column, index in plan.items():
+        data = table.column(index)
+        if not (
+            pa.types.is_floating(data.type)
+            or pa.types.is_integer(data.type)
+            or pa.types.is_boolean(data.type)
+        ):
+            raise InputError(f"{label}: column {column!r} has type {data.type}; expected numbers")
+        if data.null_count:
+            row = int(np.flatnonzero(data.is_null().to_numpy(zero_copy_only=False))[0]) + 1
+            raise InputError(f"{label}: row {row}, column {column!r}: got an empty cell; expected a number")
+        values = np.asarray(data.to_numpy(zero_copy_only=False), dtype=np.float64)
+        _check_finite(values, column, label)
+        columns[column] = values
+    return columns
+
+
+def _check_grid(time: FloatArray, label: str) -> None:
+    steps = np.diff(time)
+    dt = float(np.median(steps))
+    if not dt > 0.0:
+        raise InputError(f"{label}: column 'time' does not increase (median step {dt!r} s)")
+    off = np.flatnonzero(np.abs(steps - dt) > _GRID_TOLERANCE * dt)
+    if off.size:
+        row = int(off[0]) + 2
+        raise InputError(
+            f"{label}: row {row}, column 'time': step {float(steps[off[0]]):.6g} s; expected a uniform grid "
+            f"of {dt:.6g} s (+-{100 * _GRID_TOLERANCE:g} %): resample the log"
+        )
+
+
+def _sidecar_duty(file: Path) -> float | None:
+    sidecar = (
+        file.with_suffix(".json")
+        if file.suffix.lower() != ".gz"
+        else file.with_suffix("").with_suffix(".json")
+    )
+    if not sidecar.is_file():
+        return None
+    try:
+        data: Any = json.loads(sidecar.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(
+            f"{sidecar}: cannot read the log's JSON sidecar: {' '.join(str(exc).split())}"
+        ) from None
+    if not isinstance(data, dict):
+        raise InputError(f"{sidecar}: expected a JSON object (the log's sidecar)")
+    value = data.get("kp_duty_per_rad")
+    if value is None:
+        return None
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not (math.isfinite(value) and value > 0)
+    ):
+        raise InputError(f"{sidecar}: key 'kp_duty_per_rad': expected a number > 0 [1/rad], got {value!r}")
+    return float(value)

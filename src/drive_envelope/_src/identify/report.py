@@ -1,0 +1,146 @@
+"""An identification as one JSON object or as text.
+
+The JSON object (``drive-envelope identify --json``), SI throughout:
+
+``parameters``
+    ``{name: {"value", "std", "fixed"}}`` for all eleven parameters: ``std`` is null for a fixed
+    parameter and ``"inf"`` for a fitted one the logs do not identify (an envelope line that
+    never binds); an infinite value is ``"inf"``, as in envelope files.
+``train`` / ``validation``
+    ``{"mae_position": {log file name: rad}, "mae_position_mean": rad}`` (reference engine);
+    ``mae_velocity`` likewise when the logs have a velocity column. ``validation`` has an empty
+    ``mae_position`` and a null mean without ``--validate``.
+``engine``
+    ``{"name", "train", "validation"}``: the same errors replayed in ``--engine`` (absent for the
+    reference engine).
+``wall_time_s``, ``search``, ``envelope``, ``units``, ``notes``
+    Time taken; generations, candidate replays and whether the polish helped; the identified
+    envelope; each parameter's unit; warnings (a parameter on a bound).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from drive_envelope._src.format import format_table
+from drive_envelope._src.identify.parameters import parameter_units
+from drive_envelope._src.identify.run import Identification, LogError, mean_error
+
+__all__ = ["identification_text", "identification_to_dict"]
+
+
+def _number(value: float | None) -> float | str | None:
+    if value is None:
+        return None
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return float(value)
+
+
+def _errors(errors: tuple[LogError, ...]) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        "mae_position": {e.log.name: e.mae_position for e in errors},
+        "mae_position_mean": _number(mean_error(errors)) if errors else None,
+    }
+    if errors and all(e.mae_velocity is not None for e in errors):
+        velocities = [float(e.mae_velocity) for e in errors if e.mae_velocity is not None]
+        data["mae_velocity"] = {e.log.name: e.mae_velocity for e in errors}
+        data["mae_velocity_mean"] = sum(velocities) / len(velocities)
+    return data
+
+
+def _engine_errors(values: dict[str, float]) -> dict[str, Any]:
+    return {
+        "mae_position": dict(values),
+        "mae_position_mean": sum(values.values()) / len(values) if values else None,
+    }
+
+
+def identification_to_dict(result: Identification) -> dict[str, Any]:
+    """The JSON-compatible object of an identification (see the module docstring)."""
+    units = parameter_units(result.scenario.joint.type)
+    data: dict[str, Any] = {
+        "parameters": {
+            name: {
+                "value": _number(estimate.value),
+                "std": None if estimate.fixed else _number(estimate.std),
+                "fixed": estimate.fixed,
+            }
+            for name, estimate in result.parameters.items()
+        },
+        "train": _errors(result.train),
+        "validation": _errors(result.validation),
+        "wall_time_s": result.wall_time_s,
+        "search": {
+            "generations": result.search.generations,
+            "candidate_replays": result.search.replays,
+            "polished": result.search.polished,
+            "train_cost": result.search.cost,
+        },
+        "envelope": {
+            key: _number(value) if isinstance(value, float) else value
+            for key, value in result.envelope.to_dict().items()
+        },
+        "units": units,
+        "notes": list(result.notes),
+    }
+    if result.engine != "reference":
+        data["engine"] = {
+            "name": result.engine,
+            "train": _engine_errors(result.engine_train),
+            "validation": _engine_errors(result.engine_validation),
+        }
+    return data
+
+
+def _fmt(value: float | None) -> str:
+    if value is None:
+        return "-"
+    if math.isinf(value):
+        return "inf"
+    return f"{value:.6g}"
+
+
+def identification_text(result: Identification) -> str:
+    """A report for people: the parameters, then the errors per log (mrad or mm)."""
+    units = parameter_units(result.scenario.joint.type)
+    rows = []
+    for name, estimate in result.parameters.items():
+        if estimate.fixed:
+            std = "fixed"
+        elif estimate.std is None or math.isinf(estimate.std):
+            std = "not identified"
+        else:
+            std = _fmt(estimate.std)
+        rows.append([name, _fmt(estimate.value), std, units[name].replace("**", "^")])
+    lines = [format_table(["parameter", "value", "std", "unit (SI)"], rows), ""]
+    scale, unit = (1e3, "mrad") if result.scenario.joint.type == "revolute" else (1e3, "mm")
+    table = []
+    engine = result.engine != "reference"
+    for kind, errors, replays in (
+        ("train", result.train, result.engine_train),
+        ("validation", result.validation, result.engine_validation),
+    ):
+        for error in errors:
+            row = [kind, error.log.name, f"{scale * error.mae_position:.2f}"]
+            if engine:
+                other = replays.get(error.log.name)
+                row.append("-" if other is None else f"{scale * other:.2f}")
+            table.append(row)
+    if table:
+        header = ["set", "log", f"MAE reference [{unit}]"]
+        if engine:
+            header.append(f"MAE {result.engine} [{unit}]")
+        lines.append(format_table(header, table))
+        summary = [f"mean position error: train {scale * mean_error(result.train):.2f} {unit}"]
+        if result.validation:
+            summary.append(f"validation {scale * mean_error(result.validation):.2f} {unit}")
+        if result.engine != "reference" and result.engine_train:
+            engine_train = sum(result.engine_train.values()) / len(result.engine_train)
+            summary.append(f"train in {result.engine} {scale * engine_train:.2f} {unit}")
+        if result.engine_validation:
+            engine_validation = sum(result.engine_validation.values()) / len(result.engine_validation)
+            summary.append(f"validation in {result.engine} {scale * engine_validation:.2f} {unit}")
+        lines.append(", ".join(summary) + f"; {result.wall_time_s:.1f} s")
+    return "\n".join(lines)

@@ -1,0 +1,314 @@
+"""System identification from bench logs: the whole job behind ``drive-envelope identify``.
+
+:func:`identify` reads the stand and the logs, searches the fitted parameters on the training logs
+(:mod:`drive_envelope._src.identify.optimize`), replays the result on the training and validation
+logs and, with ``engine`` ``"physx"`` or ``"mujoco"``, replays it in that engine as well, so a user
+sees the error they will get there. The result holds every parameter (value, std, fixed), the
+identified envelope and stand scenario, and per-log mean absolute errors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.identify.logs import BenchLog, read_bench_log
+from drive_envelope._src.identify.optimize import SearchOptions, SearchResult, search
+from drive_envelope._src.identify.parameters import (
+    DEFAULT_FIT,
+    ParameterSpace,
+    build_space,
+    parameter_units,
+)
+from drive_envelope._src.identify.replay import Replay
+from drive_envelope._src.identify.stand import IdentifyStand, read_stand
+from drive_envelope._src.scenario.loads import FrictionSpec
+from drive_envelope._src.scenario.schedule import DriveSchedule
+from drive_envelope._src.scenario.spec import Scenario
+
+__all__ = [
+    "ENGINES",
+    "Estimate",
+    "Identification",
+    "LogError",
+    "identify",
+    "log_scenario",
+    "log_schedule",
+    "mean_error",
+]
+
+FloatArray = npt.NDArray[np.float64]
+ENGINES = ("reference", "physx", "mujoco")
+"""Engines the identified model can be replayed in."""
+_AT_BOUND = 1e-3  # a fitted value this close to a bound (share of the interval) is reported
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Estimate:
+    """One parameter of the result."""
+
+    value: float
+    """The value [SI]."""
+    std: float | None
+    """Standard deviation [SI]; None for a fixed parameter, inf when the logs do not identify it."""
+    fixed: bool
+    """True when the stand's value was kept (not in ``--fit``)."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class LogError:
+    """The identified model's replay of one log."""
+
+    log: BenchLog
+    """The log."""
+    mae_position: float
+    """Mean absolute position error over every row [rad or m]."""
+    mae_velocity: float | None
+    """Mean absolute velocity error [rad/s or m/s], None when the log has no velocity."""
+    position: FloatArray
+    """Simulated position per row [rad or m]."""
+    velocity: FloatArray
+    """Simulated velocity per row [rad/s or m/s]."""
+    effort: FloatArray
+    """Simulated step-average actuator effort per row [N*m or N]."""
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Identification:
+    """The result of :func:`identify`."""
+
+    parameters: dict[str, Estimate]
+    """Every parameter, fitted or fixed (SI)."""
+    envelope: PerformanceEnvelope
+    """The identified envelope."""
+    scenario: Scenario
+    """The stand with the identified values (``dt`` and duration of the first training log)."""
+    train: tuple[LogError, ...]
+    """Replays of the training logs (reference engine)."""
+    validation: tuple[LogError, ...]
+    """Replays of the validation logs (reference engine)."""
+    search: SearchResult
+    """How the optimum was found."""
+    wall_time_s: float
+    """Time the whole identification took [s]."""
+    engine: str = "reference"
+    """The engine replayed in besides the reference."""
+    engine_train: dict[str, float] = field(default_factory=dict)
+    """Log file name -> position MAE in ``engine`` (training logs) [rad or m]; empty for reference."""
+    engine_validation: dict[str, float] = field(default_factory=dict)
+    """The same for the validation logs."""
+    notes: tuple[str, ...] = ()
+    """Warnings for the user (a parameter that ended on a bound, ...)."""
+
+
+def identify(
+    train: Sequence[str | os.PathLike[str]],
+    stand: str | os.PathLike[str],
+    *,
+    validate: Sequence[str | os.PathLike[str]] = (),
+    fit: Sequence[str] = DEFAULT_FIT,
+    options: SearchOptions | None = None,
+    engine: str = "reference",
+    progress: Callable[[int, int], None] | None = None,
+) -> Identification:
+    """Estimate the stand's parameters from bench logs.
+
+    Args:
+        train: Training logs (CSV or Parquet, see :mod:`drive_envelope._src.identify.logs`).
+        stand: The stand file (:mod:`drive_envelope._src.identify.stand`).
+        validate: Held-out logs, replayed with the result only.
+        fit: Parameters to estimate (:data:`~drive_envelope._src.identify.parameters.PARAMETERS`).
+        options: Search settings (defaults: :class:`SearchOptions`).
+        engine: ``"reference"``, ``"physx"`` or ``"mujoco"``: replay the result there too.
+        progress: Called as ``progress(generation, generations)`` during the search.
+
+    Raises:
+        InputError: a bad log, stand, name or engine, or an engine that cannot represent the stand.
+    """
+    started = time.perf_counter()
+    if engine not in ENGINES:
+        raise InputError(f"--engine {engine!r}: expected one of {', '.join(ENGINES)}")
+    if not train:
+        raise InputError("identify: give at least one training log")
+    setup = read_stand(stand, parameter_units())
+    train_logs = [read_bench_log(path) for path in train]
+    validation_logs = [read_bench_log(path) for path in validate]
+    replay = Replay(setup, train_logs)
+    if "stiffness" in fit and replay.uses_duty:
+        raise InputError(
+            "--fit stiffness: the stand's [servo] duty_per_rad (or the logs' kp_duty_per_rad) ties "
+            "stiffness to max_effort; remove stiffness from --fit or the duty gain from the stand"
+        )
+    space = build_space(
+        setup.scenario, list(fit), bounds=setup.bounds, speed_scale=replay.speed_scale, source=setup.source
+    )
+    found = search(replay, space, options or SearchOptions(), progress=progress)
+    values = found.values
+    train_errors = _replay_errors(replay, values)
+    validation_errors = _replay_errors(Replay(setup, validation_logs), values) if validation_logs else ()
+    scenario = _identified(setup, values, train_logs[0])
+    engine_train, engine_validation = {}, {}
+    if engine != "reference":
+        engine_train = _engine_mae(engine, setup, values, train_logs)
+        engine_validation = _engine_mae(engine, setup, values, validation_logs)
+    leaders = dict(space.tied)  # a follower (Coulomb friction) is estimated with its leader
+    parameters = {
+        name: Estimate(
+            value=value,
+            std=found.std.get(leaders.get(name, name)),
+            fixed=leaders.get(name, name) not in space.names,
+        )
+        for name, value in values.items()
+    }
+    return Identification(
+        parameters=parameters,
+        envelope=scenario.effective_envelope() or PerformanceEnvelope(max_effort=values["max_effort"]),
+        scenario=scenario,
+        train=train_errors,
+        validation=validation_errors,
+        search=found,
+        wall_time_s=time.perf_counter() - started,
+        engine=engine,
+        engine_train=engine_train,
+        engine_validation=engine_validation,
+        notes=_bound_notes(space, values),
+    )
+
+
+def _replay_errors(replay: Replay, values: dict[str, float]) -> tuple[LogError, ...]:
+    batch = {name: np.array([value]) for name, value in values.items()}
+    errors = replay.errors(batch)
+    result = replay.simulate(batch)
+    out = []
+    for i, log in enumerate(replay.logs):
+        rows = log.rows
+        out.append(
+            LogError(
+                log=log,
+                mae_position=float(errors.position[0, i]),
+                mae_velocity=None if errors.velocity is None else float(errors.velocity[0, i]),
+                position=result.position[:rows, i],
+                velocity=result.velocity[:rows, i],
+                effort=result.effort[:rows, i],
+            )
+        )
+    return tuple(out)
+
+
+def log_scenario(setup: IdentifyStand, values: dict[str, float], log: BenchLog) -> Scenario:
+    """The stand with ``values`` set up to replay ``log`` (its dt, length and initial state)."""
+    base = setup.scenario
+    duty = log.duty_per_rad if log.duty_per_rad is not None else setup.duty_per_rad
+    stiffness = duty * values["max_effort"] if duty is not None else values["stiffness"]
+    drive = dataclasses.replace(
+        base.drive, stiffness=stiffness, damping=values["damping"], max_effort=values["max_effort"]
+    )
+    envelope = PerformanceEnvelope(
+        max_effort=values["max_effort"],
+        max_actuator_velocity=values["max_actuator_velocity"],
+        velocity_dependent_resistance=values["velocity_dependent_resistance"],
+        speed_effort_gradient=values["speed_effort_gradient"],
+        joint=base.joint.type,
+        name=base.name,
+    )
+    static = values["static_friction"]
+    friction = FrictionSpec(
+        static_friction=static,
+        dynamic_friction=min(values["dynamic_friction"], static),
+        viscous_friction=values["viscous_friction"],
+    )
+    pendulum = base.pendulum
+    if pendulum is not None:
+        pendulum = dataclasses.replace(pendulum, angle_offset=values["angle_offset"])
+    joint = dataclasses.replace(
+        base.joint,
+        armature=values["armature"],
+        initial_position=float(log.position[0]),
+        initial_velocity=float(log.velocity[0]) if log.velocity is not None else 0.0,
+    )
+    simulation = dataclasses.replace(base.simulation, dt=log.dt, duration=(log.rows - 1) * log.dt)
+    return dataclasses.replace(
+        base,
+        joint=joint,
+        drive=drive,
+        envelope=envelope,
+        friction=friction,
+        pendulum=pendulum,
+        simulation=simulation,
+        name=log.name,
+    )
+
+
+def log_schedule(log: BenchLog) -> DriveSchedule:
+    """A log's commands as a drive schedule (``rows - 1`` steps)."""
+    return DriveSchedule(
+        target_position=log.target_position[:-1],
+        target_velocity=log.target_velocity[:-1],
+        enabled=log.enabled[:-1],
+    )
+
+
+def _identified(setup: IdentifyStand, values: dict[str, float], log: BenchLog) -> Scenario:
+    scenario = log_scenario(setup, values, log)
+    return dataclasses.replace(scenario, name=setup.scenario.name or "identified stand")
+
+
+def _engine_mae(
+    engine: str, setup: IdentifyStand, values: dict[str, float], logs: Sequence[BenchLog]
+) -> dict[str, float]:
+    """Position MAE of each log replayed in ``engine`` (physx or mujoco)."""
+    if not logs:
+        return {}
+    from drive_envelope._src.teststand.engines import engine_module
+
+    engine_module(engine)  # a missing extra is one line naming it
+    scenarios = [log_scenario(setup, values, log) for log in logs]
+    schedules = [log_schedule(log) for log in logs]
+    if engine == "physx":
+        from drive_envelope._src.adapters.physx.stand import simulate_many
+
+        trajectories = simulate_many(scenarios, schedules=schedules)
+    else:
+        from drive_envelope._src.adapters.mujoco.stand import simulate as run
+
+        _load_mujoco_plugin()
+        trajectories = [run(s, schedule=p) for s, p in zip(scenarios, schedules, strict=True)]
+    return {
+        log.name: float(np.mean(np.abs(trajectory.position - log.position)))
+        for log, trajectory in zip(logs, trajectories, strict=True)
+    }
+
+
+def _load_mujoco_plugin() -> None:
+    from drive_envelope._src.adapters.mujoco.loader import load_plugin
+
+    load_plugin()
+
+
+def _bound_notes(space: ParameterSpace, values: dict[str, float]) -> tuple[str, ...]:
+    notes = []
+    for i, name in enumerate(space.names):
+        low, high = float(space.low[i]), float(space.high[i])
+        span = high - low
+        value = values[name]
+        for side, bound in (("lower", low), ("upper", high)):
+            if abs(value - bound) <= _AT_BOUND * span and not (side == "lower" and bound == 0.0):
+                notes.append(
+                    f"{name} = {value:.6g} ended at its {side} bound {bound:.6g}: widen [bounds] {name} "
+                    "in the stand file"
+                )
+    return tuple(notes)
+
+
+def mean_error(errors: Sequence[LogError]) -> float:
+    """Mean of the logs' position MAEs [rad or m] (NaN without logs)."""
+    return float(np.mean([e.mae_position for e in errors])) if errors else math.nan

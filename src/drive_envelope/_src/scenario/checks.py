@@ -1,0 +1,102 @@
+"""Validation and reading helpers shared by the scenario tables (one-line errors naming the key).
+
+Every helper raises :class:`~drive_envelope.errors.InputError`; the reading helpers take the file
+name (``source``) so their messages start with it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.values import nearest_key, read_quantity
+
+__all__ = [
+    "MAX_ITERATIONS",
+    "check_finite",
+    "check_int",
+    "check_keys",
+    "choice",
+    "quantities",
+    "read_text",
+    "table",
+    "unit_for",
+]
+
+MAX_ITERATIONS = 255
+"""Largest solver iteration count: PhysX stores solver iteration counts in 8 bits."""
+
+
+def unit_for(joint: str, revolute: str, prismatic: str) -> str:
+    """The unit string of a quantity for this joint type."""
+    return revolute if joint == "revolute" else prismatic
+
+
+def check_finite(name: str, value: float, *, positive: bool = False, nonnegative: bool = False) -> None:
+    """Refuse a value that is not a finite number (or not ``> 0`` / ``>= 0`` when asked)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(f"{name} must be a finite number, got {value!r}")
+    if positive and not value > 0.0:
+        raise InputError(f"{name} must be > 0, got {value!r}")
+    if nonnegative and value < 0.0:
+        raise InputError(f"{name} must be >= 0, got {value!r}")
+
+
+def check_int(name: str, value: int, low: int) -> None:
+    """Refuse a value that is not an integer in ``low..MAX_ITERATIONS``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= MAX_ITERATIONS:
+        raise InputError(f"{name} must be an integer in {low}..{MAX_ITERATIONS}, got {value!r}")
+
+
+def table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
+    """The table ``[name]`` of a scenario mapping (empty when absent)."""
+    value = data.get(name, {})
+    if not isinstance(value, Mapping):
+        raise InputError(f"{source}: key {name!r}: expected a table [{name}], got {value!r}")
+    return dict(value)
+
+
+def check_keys(data: Mapping[str, Any], valid: tuple[str, ...], source: str, section: str) -> None:
+    """Refuse a key that is not in ``valid``, suggesting the nearest one."""
+    prefix = f"{section}." if section else ""
+    for key in data:
+        if key not in valid:
+            raise InputError(
+                f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), valid)}; "
+                f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
+            )
+
+
+def read_text(data: Mapping[str, Any], key: str, source: str) -> str:
+    """A string value (empty when absent)."""
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")
+    return value
+
+
+def choice(data: Mapping[str, Any], section: str, key: str, choices: tuple[str, ...], source: str) -> str:
+    """One of ``choices`` (the first when absent)."""
+    value = data.get(key, choices[0])
+    if value not in choices:
+        raise InputError(
+            f"{source}: key '{section}.{key}': expected one of {', '.join(map(repr, choices))}, got {value!r}"
+        )
+    return str(value)
+
+
+def quantities(
+    data: Mapping[str, Any], section: str, units: Mapping[str, str], source: str
+) -> dict[str, float]:
+    """Read every key of ``units`` present in ``data`` as an SI float (strings may carry units)."""
+    values = {}
+    for key, unit in units.items():
+        if key in data:
+            where = f"{source}: key '{section}.{key}'"
+            value = read_quantity(data[key], unit, where)
+            if math.isnan(value):
+                raise InputError(f"{where}: expected a number in {unit}, got {data[key]!r}")
+            values[key] = value
+    return values

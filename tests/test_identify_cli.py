@@ -1,0 +1,224 @@
+"""``drive-envelope identify``: the command line, its JSON object, its files and its engines.
+
+Uses small synthetic logs the reference stand produced (a few seconds of search at most); the real
+BAM logs are in ``tests/test_identify_bam.py``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drive_envelope._src.identify.logs import read_bench_log
+from drive_envelope._src.identify.run import log_scenario, log_schedule
+from drive_envelope._src.identify.stand import read_stand
+from drive_envelope._src.io.envelope_file import load_envelope
+from drive_envelope._src.teststand.engines import reference
+
+pytest.importorskip("scipy")
+
+STAND = """
+name = "cli servo"
+[joint]
+inertia = 1e-6
+armature = 0.0015
+[drive]
+max_effort = 0.5
+damping = 0.02
+[envelope]
+max_actuator_velocity = 20.0
+[servo]
+duty_per_rad = 1.0
+[pendulum]
+mass = 0.49
+distance = 0.1
+[friction]
+static_friction = 0.02
+dynamic_friction = 0.02
+[simulation]
+solver = "pgs"
+position_iterations = 1
+velocity_iterations = 0
+"""
+FIT = "max_effort,damping,static_friction"
+
+
+@pytest.fixture
+def main(monkeypatch: pytest.MonkeyPatch) -> Callable[[list[str]], int]:
+    """The CLI's main with ``identify`` registered (the lead registers it in COMMANDS)."""
+    from drive_envelope._src.cli import main as cli
+    from drive_envelope._src.cli.commands import identify
+
+    if identify not in cli.COMMANDS:
+        monkeypatch.setattr(cli, "COMMANDS", (*cli.COMMANDS, identify))
+    return cli.main
+
+
+@pytest.fixture
+def bench(tmp_path: Path) -> tuple[Path, list[Path]]:
+    """A stand and two logs its own values produced (effort column included)."""
+    stand = tmp_path / "stand.toml"
+    stand.write_text(STAND, encoding="utf-8")
+    setup = read_stand(stand)
+    truth = {"max_effort": 0.45, "damping": 0.025, "static_friction": 0.03}
+    t = np.arange(301) * 0.005
+    paths = []
+    for i, target in enumerate((0.8 * np.sin(2 * np.pi * 1.5 * t), np.where(t < 0.7, 1.0, -0.3))):
+        path = tmp_path / f"run{i}.csv"
+        np.savetxt(path, np.column_stack([t, np.zeros_like(t), target]), delimiter=",",
+                   header="time,position,target_position", comments="")  # fmt: skip
+        log = read_bench_log(path)
+        values = {name: estimate for name, estimate in _values(setup).items()} | truth
+        run = reference.simulate(log_scenario(setup, values, log), schedule=log_schedule(log))
+        table = np.column_stack([t, run.position, target, run.velocity, run.effort])
+        np.savetxt(
+            path, table, delimiter=",", header="time,position,target_position,velocity,effort", comments=""
+        )
+        paths.append(path)
+    return stand, paths
+
+
+def _values(setup: object) -> dict[str, float]:
+    from drive_envelope._src.identify.parameters import start_values
+
+    return start_values(setup.scenario)  # type: ignore[attr-defined]
+
+
+def test_json_object_has_the_issue_keys(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Print one JSON object: parameters {value, std, fixed}, train/validation MAEs, wall time."""
+    stand, logs = bench
+    out = tmp_path / "identified.toml"
+    argv = ["identify", str(logs[0]), "--stand", str(stand), "--validate", str(logs[1]), "--fit", FIT,
+            "--json", "-o", str(out), "--generations", "20"]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    data = json.loads(captured.out)
+    assert set(data) >= {"parameters", "train", "validation", "wall_time_s"}
+    assert set(data["parameters"]) == {
+        "max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient",
+        "stiffness", "damping", "static_friction", "dynamic_friction", "viscous_friction", "armature",
+        "angle_offset",
+    }  # fmt: skip
+    for name, entry in data["parameters"].items():
+        assert set(entry) == {"value", "std", "fixed"}
+        assert entry["fixed"] == (name not in [*FIT.split(","), "dynamic_friction"])
+    assert data["parameters"]["armature"]["std"] is None
+    assert data["parameters"]["max_effort"]["value"] == pytest.approx(0.45, rel=0.02)
+    assert set(data["train"]["mae_position"]) == {"run0.csv"}
+    assert set(data["validation"]["mae_position"]) == {"run1.csv"}
+    assert data["train"]["mae_position_mean"] < 1e-3 and data["validation"]["mae_position_mean"] < 2e-3
+    assert data["wall_time_s"] > 0 and "engine" not in data
+    envelope = load_envelope(out)
+    assert envelope.max_effort == data["parameters"]["max_effort"]["value"]
+    assert f"wrote {out}" in captured.err
+
+
+def test_text_report_and_plot(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Print the parameter table and per-log errors; write the figure."""
+    pytest.importorskip("matplotlib")
+    stand, logs = bench
+    figure = tmp_path / "fit.png"
+    argv = ["identify", *map(str, logs), "--stand", str(stand), "--fit", "max_effort", "--plot", str(figure),
+            "--generations", "3", "--population", "4"]  # fmt: skip
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "max_effort" in text and "fixed" in text and "run1.csv" in text and "mean position error" in text
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_mujoco_replay_reports_its_error(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Replay the result in MuJoCo and report its error beside the reference's (equal: PGS, no viscous)."""
+    pytest.importorskip("mujoco")
+    from drive_envelope._src.adapters.mujoco import build, loader
+
+    try:
+        loader.load_plugin()
+    except build.PluginError:
+        build.build_plugin(quiet=True)
+    stand, logs = bench
+    argv = ["identify", str(logs[0]), "--stand", str(stand), "--validate", str(logs[1]), "--fit", FIT,
+            "--engine", "mujoco", "--json", "--generations", "5"]  # fmt: skip
+    assert main(argv) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["engine"]["name"] == "mujoco"
+    ours = data["validation"]["mae_position"]["run1.csv"]
+    theirs = data["engine"]["validation"]["mae_position"]["run1.csv"]
+    assert theirs == pytest.approx(ours, abs=2e-4)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--fit", "max_torque"], "--fit 'max_torque': unknown parameter"),
+        (["--fit", "max_effort,,damping"], "expected comma-separated parameter names"),
+        (["-o", "{tmp}/env.txt"], "expected an envelope file name ending in .toml or .json"),
+        (["--plot", "{tmp}/fig.gif"], "expected a .png, .svg or .pdf file name"),
+        (["--fit", "stiffness"], "ties stiffness to max_effort"),
+    ],
+)
+def test_bad_requests_are_one_line(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    extra: list[str],
+    message: str,
+) -> None:
+    """Exit 2 with one line for a bad --fit, output name or figure name, and write nothing."""
+    stand, logs = bench
+    argv = [
+        "identify",
+        str(logs[0]),
+        "--stand",
+        str(stand),
+        *[a.replace("{tmp}", str(tmp_path)) for a in extra],
+    ]
+    before = set(tmp_path.iterdir())
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    assert set(tmp_path.iterdir()) == before
+
+
+def test_bound_reached_is_a_warning(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Warn on stderr when a fitted parameter ends at its bound (widen [bounds])."""
+    stand, logs = bench
+    narrow = tmp_path / "narrow.toml"
+    narrow.write_text(
+        stand.read_text(encoding="utf-8") + "[bounds]\nmax_effort = [0.48, 0.6]\n", encoding="utf-8"
+    )
+    argv = [
+        "identify",
+        str(logs[0]),
+        "--stand",
+        str(narrow),
+        "--fit",
+        "max_effort",
+        "--generations",
+        "5",
+        "--population",
+        "4",
+    ]
+    assert main(argv) == 0
+    assert "max_effort = 0.48 ended at its lower bound 0.48" in capsys.readouterr().err
