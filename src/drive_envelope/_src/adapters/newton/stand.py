@@ -160,7 +160,7 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
     Raises:
         InputError: a value Newton's float32 model cannot hold, or a state that diverged.
     """
-    from drive_envelope._src.adapters.newton.warp_setup import quiet_warp
+    from drive_envelope._src.kernels.warp_setup import quiet_warp
 
     _check(scenario)
     with quiet_warp():

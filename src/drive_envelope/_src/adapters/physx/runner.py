@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import contextlib
 import gc
-import logging
 import math
 import os
 import tempfile
@@ -40,6 +39,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.adapters.physx.scene import ARTICULATION_PATH, JOINT_PATH, LINK_PATH
 from drive_envelope._src.errors import DriveEnvelopeError, InputError
+from drive_envelope._src.kernels.warp_setup import quiet_warp
 
 __all__ = ["PhysxJob", "PhysxResult", "cache_folder", "inspect_drives", "run_jobs"]
 
@@ -175,31 +175,38 @@ def _prepare() -> Any:
         (folder / name).mkdir(parents=True, exist_ok=True)
     # the Omniverse client fixes its cache folder on the first ovstage call, Warp on its init;
     # PhysX's cooked colliders already go to a process-private temp folder by default
-    with _environment(XDG_CACHE_HOME=str(folder / "cache"), WARP_CACHE_PATH=str(folder / "warp")):
-        _init_warp()
+    with (
+        _environment(XDG_CACHE_HOME=str(folder / "cache"), WARP_CACHE_PATH=str(folder / "warp")),
+        quiet_warp(),
+    ):
         ovphysx.set_log_level(ovphysx.LogLevel.ERROR)
         with contextlib.suppress(RuntimeError):
             # sticky per process; refused while another PhysX instance is alive, in which case
             # the stage's enableGPUDynamics = false still keeps the stand on CPU dynamics
             ovphysx.PhysX.set_cpu_mode(True)
         try:
-            ovstage.population.register_usd_schemas([str(path) for path in physx_schema_paths()])
+            ovstage.population.register_usd_schemas(_schema_paths(ovphysx, physx_schema_paths()))
         except FileNotFoundError as exc:
             raise InputError(f"--engine physx: needs physx-usd-schemas: {exc}") from None
     _ready = True
     return ovphysx
 
 
-def _init_warp() -> None:
-    """Initialise Warp (ovphysx returns Warp arrays) without its banner; a no-op if already done."""
-    import warp as wp
+def _schema_paths(ovphysx: Any, physx_paths: Any) -> list[str]:
+    """The PhysX schemas, and Newton's when ovphysx knows them (newton-usd-schemas installed).
 
-    level = wp.config.log_level
-    wp.config.log_level = max(level, logging.WARNING)
-    try:
-        wp.init()
-    finally:
-        wp.config.log_level = level
+    ovstage builds its schema definitions once, on the first read: a schema registered later is
+    ignored (ovphysx then warns at every attach that newton:* attributes may be dropped), so every
+    schema ovphysx may read is registered here, together, before anything is populated.
+    """
+    paths = [str(path) for path in physx_paths]
+    newton_root = getattr(ovphysx, "newton_schema_root", None)
+    if newton_root is not None:
+        with contextlib.suppress(Exception):  # no newton-usd-schemas: nothing to register
+            root = newton_root()
+            if root:
+                paths.append(str(root))
+    return paths
 
 
 @contextlib.contextmanager
