@@ -159,6 +159,8 @@ def test_fit_from_curve_with_fixed_speed_limit(tmp_path: Path, capsys: pytest.Ca
         (["--fix", "max_effort"], "expected NAME=VALUE"),
         (["--fix", "max_effort=3 rpm"], "--fix max_effort"),
         (["--outlier-quantile", "0.9"], "outlier-quantile"),
+        (["--frontier-band", "0"], "--frontier-band: expected a fraction in (0, 1], got '0'"),
+        (["--frontier-band", "1.5"], "--frontier-band: expected a fraction in (0, 1], got '1.5'"),
     ],
 )
 def test_fit_bad_arguments_exit_2(
@@ -168,6 +170,60 @@ def test_fit_bad_arguments_exit_2(
     log = write_log(tmp_path / "sweep.csv", [(0.0, 1.0, 1.0), (0.1, 2.0, 1.0), (0.2, 3.0, 0.5)])
     assert main(["fit", str(log), *args]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_fit_report_names_the_samples_that_decided_each_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """List, in text and JSON, the samples on each line of a log whose interior dwarfs its frontier."""
+    # ENV's corner: 10 - 0.5 v = (5 - v) / 0.2 -> v = 15 / 4.5; rows 2-11 accelerate on eq. 1,
+    # rows 12-21 ride eq. 2, rows 22-101 lie well inside (60 % of the limit)
+    corner = 15.0 / 4.5
+    v1 = np.linspace(0.0, 0.9 * corner, 10)
+    t2 = np.linspace(float(ENV.effort_limit(1.05 * corner)), 0.5, 10)
+    inner = np.linspace(0.1, 4.5, 80)
+    velocity = [*v1.tolist(), *ENV.velocity_limit(t2).tolist(), *inner.tolist()]
+    effort = [*ENV.effort_limit(v1).tolist(), *t2.tolist(), *(0.6 * ENV.effort_limit(inner)).tolist()]
+    log = write_log(
+        tmp_path / "run.csv",
+        [(0.0, 0.0, 0.0)]  # at rest: on no line
+        + [(0.01 * (i + 1), v, e) for i, (v, e) in enumerate(zip(velocity, effort, strict=True))],
+    )
+    assert main(["fit", str(log), "--bootstrap", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "lines, decided by the samples on them (within 1 % of the cap)" in out
+    assert any(
+        line.startswith("eq. 2 velocity  fitted") and line.endswith("12-21") for line in out.splitlines()
+    )
+    assert main(["fit", str(log), "--bootstrap", "0", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["lines"]["effort"]["samples"] == [[2, 11]] and data["lines"]["velocity"]["samples"] == [
+        [12, 21]
+    ]
+    assert data["frontier"]["samples"] == 20  # the saturated rows, on the hull
+    for field in (
+        "max_effort",
+        "max_actuator_velocity",
+        "velocity_dependent_resistance",
+        "speed_effort_gradient",
+    ):
+        assert data[field] == pytest.approx(getattr(ENV, field), rel=1e-9)
+
+
+def test_fit_from_curve_writes_a_dc_motors_speed_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Write the no-load speed of a published DC motor curve into the envelope file (issue 18's C21)."""
+    points = tmp_path / "c21.csv"
+    points.write_text("speed [rpm],torque [oz-in]\n3780,0\n3360,38\n3117,60\n0,342\n", encoding="utf-8")
+    out = tmp_path / "c21.toml"
+    assert main(["fit", "--from-curve", str(points), "--json", "-o", str(out)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["velocity_dependent_resistance"] == 0.0
+    assert data["status"]["max_actuator_velocity"] == "fitted"
+    written = load_envelope(out)
+    assert written.max_actuator_velocity == pytest.approx(3780 * 2 * math.pi / 60, rel=1e-4)
+    assert written.max_effort == pytest.approx(342 * 0.45359237 / 16 * 9.80665 * 0.0254, rel=1e-9)
 
 
 def test_check_reads_parquet(tmp_path: Path, envelope_file: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -236,3 +236,41 @@ def test_containing_fit_holds_every_sample_of_any_envelope(
     result = fit_samples(velocity, effort, FitOptions(bootstrap=0))
     assert result.samples_outside == 0
     assert result.envelope.contains(velocity, effort, atol=1e-9 * max(max_effort, speed)).all()
+
+
+def test_frontier_band_is_validated() -> None:
+    """Refuse a frontier band outside (0, 1], naming it; accept 1 (every sample) and None (automatic)."""
+    for bad in (0.0, -0.1, 1.5, float("nan"), True, "0.1"):
+        with pytest.raises(InputError, match=r"frontier-band: expected a fraction in \(0, 1\]"):
+            FitOptions(frontier_band=bad)  # type: ignore[arg-type]
+    velocity, effort = sweep(TRUTH, 200)
+    every = fit_samples(velocity, effort, FitOptions(frontier_band=1.0, bootstrap=0))
+    assert every.frontier_samples == 200 and every.frontier_band == 1.0
+    assert_close(every.envelope, TRUTH, 1e-6)
+
+
+def test_json_reports_the_frontier_and_each_lines_samples() -> None:
+    """Give the frontier's size and band, and per line its on-line samples by quadrant pair."""
+    velocity, effort = sweep(TRUTH, 300, seed=9)
+    data = fit_samples(velocity, effort, FitOptions(bootstrap=0)).to_dict()
+    assert data["frontier"] == {"samples": 300, "band": 1e-4, "set_aside": 0}
+    lines = data["lines"]
+    assert lines["effort"]["on_line"] + lines["velocity"]["on_line"] == 300
+    for line in lines.values():
+        assert line["identified"] and line["driving"] + line["braking"] == line["on_line"]
+        assert sum(last - first + 1 for first, last in line["samples"]) == line["on_line"]
+
+
+def test_fixed_parameters_hold_on_a_speed_torque_line() -> None:
+    """Keep a fixed max_effort on a line to zero effort; a fixed R keeps the line as eq. 1."""
+    line = PerformanceEnvelope(max_effort=5.0, max_actuator_velocity=10.0, speed_effort_gradient=2.0)
+    effort = np.linspace(0.0, 5.0, 50)
+    velocity = line.velocity_limit(effort)  # from (0, 5 N*m) to (10 rad/s, 0): one line
+    held = fit_samples(velocity, effort, FitOptions(fixed={"max_effort": 6.0}, bootstrap=0)).envelope
+    assert held.max_effort == 6.0 and held.velocity_dependent_resistance == 0.0
+    assert held.max_actuator_velocity == pytest.approx(10.0, rel=1e-9)
+    assert held.speed_effort_gradient == pytest.approx(2.0, rel=1e-6)
+    loss = fit_samples(
+        velocity, effort, FitOptions(fixed={"velocity_dependent_resistance": 0.5}, bootstrap=0)
+    ).envelope
+    assert math.isinf(loss.max_actuator_velocity) and loss.max_effort == pytest.approx(5.0, rel=1e-9)

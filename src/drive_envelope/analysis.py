@@ -34,7 +34,7 @@ from drive_envelope._src.analysis.check import (
     Violation,
 )
 from drive_envelope._src.analysis.curve import read_curve
-from drive_envelope._src.analysis.fit import FitOptions, FitResult, ParameterEstimate, fit_samples
+from drive_envelope._src.analysis.fit import FitLine, FitOptions, FitResult, ParameterEstimate, fit_samples
 from drive_envelope._src.analysis.logs import DEFAULT_CHUNK_ROWS, LogChunk, LogColumns, iter_log, read_log
 from drive_envelope._src.analysis.mapping import JointMapping, load_joint_mapping
 
@@ -45,6 +45,7 @@ __all__ = [
     "CheckOptions",
     "CheckReport",
     "EnvelopeSource",
+    "FitLine",
     "FitOptions",
     "FitResult",
     "JointCheck",

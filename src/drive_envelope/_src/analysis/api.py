@@ -181,5 +181,5 @@ def fit_curve(
     if not curve_options.name:
         curve_options = replace(curve_options, name=Path(path).stem)
     result = _fit_from(str(path), velocity, effort, curve_options)
-    note = "digitized curve: every point kept, no bootstrap; the residuals show the digitizing scatter"
+    note = "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
     return replace(result, notes=(*result.notes, note))

@@ -9,6 +9,10 @@ gear first (speed / ratio, torque * ratio * efficiency).
     0,820
     2500,760
     ...
+
+A curve that falls to zero effort at its no-load speed (a DC motor's published curve) is the
+speed-torque line of eq. 2, and the fit reads it so, as the datasheet derivation reads the same
+points stored as ``[losses] operating_points`` (see :mod:`.fit_choice`).
 """
 
 from __future__ import annotations

@@ -1,51 +1,63 @@
-"""Fitting an envelope to measured samples of saturated operation (e.g. a torque-speed sweep).
+"""Fitting an envelope to measured samples of saturated operation (a torque-speed sweep, a log).
 
 The samples are folded into the first quadrant (``x = |v|``, ``y = |tau|``; the envelope is symmetric)
-and the fit looks for the tightest region of the spec's form that contains them::
+and the fit looks for the tightest region of the spec's form around them::
 
     y <= max_effort - R*x            (eq. 1)          x <= max_actuator_velocity - G*y   (eq. 2)
 
-"Tightest" is the smallest mean gap between each sample and the line that bounds it (the area
-between the data and the boundary), subject to at most a fraction ``outlier_quantile`` of the
-samples lying outside (0: all inside). For one line this is a convex problem in its slope, solved by
-golden-section search; the intercept is then the ``1 - q`` quantile of ``y + R*x`` (or ``x + G*y``).
-With two lines the samples are split at a speed ``x_c`` (eq. 1 below, eq. 2 above) and ``x_c`` is
-scanned. Samples bounded by the wrong line near the corner lie inside it and do not move it.
+in three steps:
 
-Identifiability: eq. 2 is fitted only when the data show it, i.e. when two lines at least halve the
-mean gap of the best single line (noise alone gives a ratio near 1). Otherwise
-``max_actuator_velocity`` is reported as ``inf`` (not identified: the data
-never reach the speed limit) rather than the largest speed seen. A slope whose samples span no range
-(e.g. all at one speed) is reported as 0, not identified.
+1. **Frontier** (:mod:`.fit_frontier`): only the samples on or near the upper hull of ``|effort|``
+   over ``|velocity|`` (driving and braking quadrants together) are fitted. Interior samples, taken
+   while the drive was not saturated, say nothing about the lines and would swamp the few
+   saturated ones. With an outlier allowance, spikes standing clear above the hull are set aside
+   first, and the band widens round by round to the noise the fit sees (:mod:`.fit_rounds`).
+2. **Structure** (:mod:`.fit_choice`): eq. 1 only, both lines split at a speed, or eq. 2 only (one
+   line that reaches zero effort is the speed-torque line), as the frontier shows them; a speed
+   limit the samples do not lie along is not invented.
+3. **Lines** (:mod:`.fit_line`): each line is the tightest bound of its samples (smallest mean gap)
+   with at most a fraction ``outlier_quantile`` of them outside (0: all inside).
 
-Uncertainty: the standard deviation and 95 % interval over bootstrap resamples of the samples, with
-the model structure (which lines, split speed) of the main fit. For a frontier (q = 0 is a maximum)
-the bootstrap spread is a rough scale, not an exact confidence interval.
+The result says which samples decided each line (:class:`FitLine`): those within 1 % of it, by
+sample number and quadrant pair.
+
+Identifiability: a sweep that never reaches the speed limit cannot determine
+``max_actuator_velocity``; it is reported as ``inf`` (not identified) rather than the largest speed
+seen. A slope whose samples span no range (e.g. all at one speed) is reported as 0, not identified.
+
+Uncertainty: the standard deviation and 95 % interval over bootstrap resamples of the frontier
+samples, with the model structure (which lines, split speed) of the main fit. For a frontier (q = 0
+is a maximum) the bootstrap spread is a rough scale, not an exact confidence interval.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.fit_estimates import (
+    ParameterEstimate,
+    ParameterStatus,
+    bootstrap,
+    estimates,
+)
+from drive_envelope._src.analysis.fit_evidence import FitLine, line_evidence
+from drive_envelope._src.analysis.fit_frontier import Frontier
 from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
+from drive_envelope._src.analysis.fit_model import Model
+from drive_envelope._src.analysis.fit_rounds import frontier_fit
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.params.table import si_unit
 
-__all__ = ["FitOptions", "FitResult", "ParameterEstimate", "ParameterStatus", "fit_samples"]
+__all__ = ["FitLine", "FitOptions", "FitResult", "ParameterEstimate", "ParameterStatus", "fit_samples"]
 
 FloatArray = npt.NDArray[np.float64]
-ParameterStatus = Literal["fitted", "fixed", "unidentified"]
-
-_GOLDEN_STEPS = 48  # golden-section iterations: the bracket shrinks by 0.618**48 ~ 1e-10
-_SPLIT_CANDIDATES = 25  # split speeds tried per scan pass (two passes: coarse, then around the best)
-_EQ2_COST_RATIO = 0.5  # two lines must at least halve the one-line cost to count as identified
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -55,8 +67,9 @@ class FitOptions:
     joint: JointType = "revolute"
     """Joint type of the samples (fixes the units): ``"revolute"`` or ``"prismatic"``."""
     outlier_quantile: float = 0.0
-    """Fraction of samples allowed outside the fitted envelope, in ``[0, 0.5]``. 0 gives the tightest
-    envelope containing every sample; 0.5 the central line through noisy saturated samples."""
+    """Fraction of each line's samples allowed outside the fitted envelope, in ``[0, 0.5]``. 0 gives
+    the tightest envelope containing every sample; 0.5 the central line through noisy saturated
+    samples."""
     fixed: Mapping[str, float] = field(default_factory=dict)
     """Parameters held at given values [SI], by field name (``max_actuator_velocity`` may be inf)."""
     bootstrap: int = 200
@@ -64,7 +77,13 @@ class FitOptions:
     seed: int = 0
     """Seed of the bootstrap's random generator, an integer >= 0 (results are reproducible)."""
     min_segment_samples: int | None = None
-    """Fewest samples that identify a line; None: ``max(5, 2 %)`` of the samples."""
+    """Fewest samples that identify a line; None: ``max(5, 2 %)`` of the frontier samples."""
+    frontier_band: float | None = None
+    """Samples within this fraction of the upper hull's radius (along their ray from the origin) are
+    frontier samples, the ones fitted, in ``(0, 1]``; 1 fits every sample. None (automatic): the
+    samples on the hull (within :data:`ON_HULL`, rounding in logs) for a containing fit of clean
+    samples, :data:`DEFAULT_BAND` for noisy ones, and with an outlier allowance :data:`DEFAULT_BAND`
+    widened to six times the noise the fit sees."""
     name: str = ""
     """Name written into the fitted envelope."""
 
@@ -74,6 +93,11 @@ class FitOptions:
         quantile = self.outlier_quantile
         if isinstance(quantile, bool) or not isinstance(quantile, (int, float)) or not 0.0 <= quantile <= 0.5:
             raise InputError(f"outlier-quantile: expected a number in [0, 0.5], got {quantile!r}")
+        band = self.frontier_band
+        if band is not None and (
+            isinstance(band, bool) or not isinstance(band, (int, float)) or not 0.0 < band <= 1.0
+        ):
+            raise InputError(f"frontier-band: expected a fraction in (0, 1], got {band!r}")
         check_count("bootstrap", self.bootstrap, MAX_BOOTSTRAP)
         check_count("seed", self.seed, None)
         least = self.min_segment_samples
@@ -94,42 +118,30 @@ class FitOptions:
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
-class ParameterEstimate:
-    """One fitted parameter with its uncertainty."""
-
-    name: str
-    """Field name (``max_effort``, ...)."""
-    value: float
-    """Estimate [SI unit of the field]; ``inf`` for an unidentified ``max_actuator_velocity``."""
-    unit: str
-    """SI unit (``N*m``, ``rad/s``, ...)."""
-    status: ParameterStatus
-    """``"fitted"``, ``"fixed"`` (held by the user) or ``"unidentified"`` (the data cannot tell)."""
-    std: float | None
-    """Bootstrap standard deviation [unit]; None when not fitted or not bootstrapped."""
-    interval: tuple[float, float] | None
-    """Bootstrap 2.5 % and 97.5 % percentiles [unit]; None when ``std`` is None."""
-    note: str = ""
-    """Why a parameter is unidentified, or how it was obtained."""
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
 class FitResult:
-    """A fitted envelope, its parameters with uncertainties, and the residuals."""
+    """A fitted envelope, its parameters with uncertainties, the samples that decided it, residuals."""
 
     envelope: PerformanceEnvelope
     """The fitted envelope (joint side, SI)."""
     parameters: tuple[ParameterEstimate, ...]
     """The four parameters in :data:`ENVELOPE_FIELDS` order."""
     samples: int
-    """Number of samples fitted."""
+    """Number of samples given."""
     samples_outside: int
-    """Samples outside the fitted envelope (at most about ``outlier_quantile`` of them)."""
+    """Samples outside the fitted envelope (at most about ``outlier_quantile`` of the frontier)."""
+    frontier_samples: int
+    """Samples on the frontier (near the upper hull), the ones the lines were fitted to."""
+    frontier_band: float
+    """Largest gap of a frontier sample to the hull, as a fraction of the hull's radius."""
+    set_aside: int
+    """Samples far outside the fit left out of the hull (with an outlier allowance; kept in the fit)."""
+    lines: tuple[FitLine, FitLine]
+    """The samples that decided eq. 1 and eq. 2 (in that order)."""
     effort_residuals: FloatArray
-    """``|tau| - (max_effort - R|v|)`` of the samples bounded by eq. 1, positive outside [N*m or N]."""
+    """``|tau| - (max_effort - R|v|)`` of the frontier samples eq. 1 bounds, positive outside [N*m or N]."""
     velocity_residuals: FloatArray
-    """``|v| - (max_actuator_velocity - G|tau|)`` of the samples bounded by eq. 2, positive outside
-    [rad/s or m/s]; empty when eq. 2 is not identified."""
+    """``|v| - (max_actuator_velocity - G|tau|)`` of the frontier samples eq. 2 bounds, positive
+    outside [rad/s or m/s]; empty when eq. 2 is not identified."""
     notes: tuple[str, ...] = ()
     """Remarks on identifiability and method."""
 
@@ -152,6 +164,12 @@ class FitResult:
         data["units"] = {p.name: p.unit for p in self.parameters}
         data["samples"] = self.samples
         data["samples_outside"] = self.samples_outside
+        data["frontier"] = {
+            "samples": self.frontier_samples,
+            "band": self.frontier_band,
+            "set_aside": self.set_aside,
+        }
+        data["lines"] = {line.curve: line.to_dict() for line in self.lines}
         data["residuals"] = {
             "effort": _residual_summary(self.effort_residuals),
             "velocity": _residual_summary(self.velocity_residuals),
@@ -175,209 +193,6 @@ def _residual_summary(residuals: FloatArray) -> dict[str, Any]:
     }
 
 
-# -- one line -------------------------------------------------------------------------------------
-
-
-def _top_index(size: int, q: float) -> int:
-    """Index, in sorted order, of the smallest bound with at most a fraction ``q`` of values above."""
-    return min(max(math.ceil((1.0 - q) * size) - 1, 0), size - 1)
-
-
-def _top(values: FloatArray, q: float) -> float:
-    """Smallest bound with at most a fraction ``q`` of ``values`` above it."""
-    if q == 0.0:
-        return float(values.max())
-    k = _top_index(values.size, q)
-    return float(np.partition(values, k)[k])
-
-
-def _line_cost(a: FloatArray, q: float) -> float:
-    """Cost of the tightest bound of ``a = w + s*u`` (convex in the slope).
-
-    The mean gap below the bound plus ``(1-q)/q`` times the mean excess above it: a pinball loss,
-    minimized over the bound by the ``1 - q`` quantile; for q = 0 just the mean gap.
-    """
-    mean = float(a.sum()) / a.size
-    if q == 0.0:
-        return float(a.max()) - mean
-    k = _top_index(a.size, q)
-    ordered = np.partition(a, k)
-    bound = float(ordered[k])
-    excess = float(ordered[k + 1 :].sum()) - bound * (a.size - k - 1)
-    # mean(gap) + mean(excess) * (1 + (1-q)/q) with gap = bound - a and excess = max(a - bound, 0)
-    return bound - mean + excess / (q * a.size)
-
-
-def _golden(cost: Callable[[float], float], low: float, high: float) -> float:
-    """Minimizer of a unimodal ``cost`` on ``[low, high]`` by golden-section search."""
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = low, high
-    c, d = b - ratio * (b - a), a + ratio * (b - a)
-    fc, fd = cost(c), cost(d)
-    for _ in range(_GOLDEN_STEPS):
-        if fc <= fd:
-            b, d, fd = d, c, fc
-            c = b - ratio * (b - a)
-            fc = cost(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + ratio * (b - a)
-            fd = cost(d)
-    best = min((cost(low), low), (fc, c), (fd, d), (cost(high), high))
-    return best[1]
-
-
-def _frontier(
-    u: FloatArray, w: FloatArray, q: float, slope: float | None, intercept: float | None
-) -> tuple[float, float, bool]:
-    """Tightest line ``w <= intercept - slope*u`` (slope >= 0) with at most a fraction ``q`` above it.
-
-    Returns ``(slope, intercept, slope_identified)``; fixed values are kept as given.
-    """
-    if slope is not None and intercept is not None:
-        return slope, intercept, True
-    if u.size == 0:  # no sample on this line: nothing to fit (callers keep both sides populated)
-        return slope or 0.0, 0.0 if intercept is None else intercept, False
-    if slope is not None:
-        return slope, _top(w + slope * u, q), True
-    scale = max(float(np.abs(u).max()), 1e-300)
-    if intercept is not None:
-        moving = u > 1e-12 * scale
-        if not moving.any():
-            return 0.0, intercept, False
-        # the largest slope keeping all but a fraction q below the line through (0, intercept)
-        ratios = (intercept - w[moving]) / u[moving]
-        bound = float(ratios.min()) if q == 0.0 else float(np.quantile(ratios, q, method="lower"))
-        return max(bound, 0.0), intercept, True
-    if float(np.ptp(u)) <= 1e-9 * scale:
-        return 0.0, _top(w, q), False
-
-    def cost(s: float) -> float:
-        return _line_cost(w + s * u, q)
-
-    high = max(float(np.ptp(w)), 1e-300) / float(np.ptp(u))
-    for _ in range(60):  # widen the bracket until the cost rises: the minimum then lies below `2*high`
-        if cost(2.0 * high) >= cost(high):
-            break
-        high *= 2.0
-    best = _golden(cost, 0.0, 2.0 * high)
-    return best, _top(w + best * u, q), True
-
-
-# -- two lines ------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class _Model:
-    """Parameters of one fit and which slopes the data identified."""
-
-    effort: float
-    resistance: float
-    velocity: float
-    gradient: float
-    split: float  # speed separating eq. 1 samples (x <= split) from eq. 2 samples; inf: eq. 1 only
-    resistance_identified: bool
-    gradient_identified: bool
-
-
-def _fit_structure(
-    x: FloatArray, y: FloatArray, q: float, fixed: Mapping[str, float], split: float
-) -> _Model:
-    """Fit with a given structure: eq. 1 only (``split = inf``) or both lines split at ``split``."""
-    below = x <= split
-    slope, top, r_ok = _frontier(
-        x[below], y[below], q, fixed.get("velocity_dependent_resistance"), fixed.get("max_effort")
-    )
-    if math.isinf(split):
-        return _Model(top, slope, math.inf, fixed.get("speed_effort_gradient", 0.0), split, r_ok, False)
-    above = ~below
-    gradient, limit, g_ok = _frontier(
-        y[above], x[above], q, fixed.get("speed_effort_gradient"), fixed.get("max_actuator_velocity")
-    )
-    if q == 0.0:  # a sample outside either half-plane is outside the envelope: each must hold all
-        if "max_effort" not in fixed:
-            top = max(top, float((y + slope * x).max()))
-        if "max_actuator_velocity" not in fixed:
-            limit = max(limit, float((x + gradient * y).max()))
-    return _Model(top, slope, limit, gradient, split, r_ok, g_ok)
-
-
-def _gaps(model: _Model, x: FloatArray, y: FloatArray, x_scale: float, y_scale: float) -> FloatArray:
-    """Gap of each sample to the line bounding it, as a fraction of the data range (>= 0 inside)."""
-    gap = (model.effort - model.resistance * x - y) / y_scale
-    if math.isfinite(model.split):
-        above = x > model.split
-        gap[above] = (model.velocity - model.gradient * y[above] - x[above]) / x_scale
-    return gap
-
-
-def _model_cost(model: _Model, x: FloatArray, y: FloatArray, q: float) -> float:
-    """Mean gap of the samples inside their lines, as a fraction of the data range.
-
-    Samples outside (the outlier allowance) are left out, so gross outliers, however far, do not
-    decide the split or the choice between one and two lines.
-    """
-    gap = _gaps(model, x, y, max(float(x.max()), 1e-300), max(float(y.max()), 1e-300))
-    inside = gap[gap >= 0.0]
-    return float(inside.mean()) if inside.size else 0.0
-
-
-def _scan_split(
-    x: FloatArray, y: FloatArray, q: float, fixed: Mapping[str, float], least: int
-) -> _Model | None:
-    """Best two-line fit over split speeds leaving ``least`` samples on each side; None if too few."""
-    order = np.sort(x)
-    n = order.size
-    if n < 2 * least:
-        return None
-
-    def score(split: float) -> tuple[float, _Model]:
-        model = _fit_structure(x, y, q, fixed, split)
-        return _model_cost(model, x, y, q), model
-
-    def candidates(first: int, last: int) -> FloatArray:
-        # split speeds leaving `least` samples on each side; ties (a vertical eq. 2) stay together
-        values = np.unique(order[np.linspace(first, last, _SPLIT_CANDIDATES).astype(int)])
-        below = np.searchsorted(order, values, side="right")
-        return values[(below >= least) & (n - below >= least)]
-
-    low, high = least - 1, n - least - 1
-    coarse = candidates(low, high)
-    if coarse.size == 0:
-        return None
-    best = min(coarse.tolist(), key=lambda value: score(value)[0])
-    k = int(np.searchsorted(order, best, side="right")) - 1
-    step = max((high - low) // (_SPLIT_CANDIDATES - 1), 1)
-    fine = np.union1d(candidates(max(low, k - step), min(high, k + step)), [best])
-    return min((score(value) for value in fine.tolist()), key=lambda item: item[0])[1]
-
-
-def _choose_model(
-    x: FloatArray, y: FloatArray, q: float, fixed: Mapping[str, float], least: int
-) -> tuple[_Model, str]:
-    """The eq. 1-only or the two-line model, whichever the data support; and a note on the choice."""
-    speed_fixed = fixed.get("max_actuator_velocity")
-    one = _fit_structure(x, y, q, fixed, math.inf)
-    if speed_fixed is not None and math.isinf(speed_fixed):
-        return one, "max_actuator_velocity fixed at inf: eq. 2 not fitted"
-    two = _scan_split(x, y, q, fixed, least)
-    if two is None:
-        if speed_fixed is not None:
-            raise InputError(
-                f"fix: max_actuator_velocity needs at least {2 * least} samples to place eq. 2, got {x.size}"
-            )
-        return one, f"eq. 2 not identified: {x.size} samples, fewer than {2 * least} needed for two lines"
-    if speed_fixed is not None:
-        return two, ""
-    # two lines only when they fit clearly better than one (noise alone gives a ratio near 1)
-    if _model_cost(two, x, y, q) < _EQ2_COST_RATIO * _model_cost(one, x, y, q):
-        return two, ""
-    return one, (
-        f"max_actuator_velocity not identified: no samples show the speed limit (eq. 2); the highest "
-        f"|velocity| seen is {float(x.max()):.6g}, so the limit is at least that; reported as inf"
-    )
-
-
 # -- public ---------------------------------------------------------------------------------------
 
 
@@ -387,144 +202,101 @@ def fit_samples(
     """Fit the tightest envelope of the spec's form to samples of saturated operation.
 
     Args:
-        velocity: Joint velocity samples [rad/s or m/s]; only ``|velocity|`` matters.
-        effort: Effort samples at the same instants [N*m or N]; only ``|effort|`` matters.
-        options: Joint type, outlier quantile, fixed parameters, bootstrap size.
+        velocity: Joint velocity samples [rad/s or m/s].
+        effort: Effort samples at the same instants [N*m or N]; the sign relative to the velocity
+            only tells driving from braking samples in the report.
+        options: Joint type, outlier quantile, fixed parameters, bootstrap size, frontier band.
 
     Returns:
         A :class:`FitResult` with the envelope, each parameter's estimate and bootstrap uncertainty,
-        and the residuals.
+        the samples that decided each line, and the residuals.
 
     Raises:
         InputError: arrays of different shapes, fewer than 3 samples, NaN or infinite values,
             magnitudes above :data:`MAX_SAMPLE`.
     """
     options = options or FitOptions()
-    x, y = fit_samples_input(velocity, effort)
+    x, y, pair = fit_samples_input(velocity, effort)
     q, fixed = options.outlier_quantile, dict(options.fixed)
-    least = options.min_segment_samples or max(5, math.ceil(0.02 * x.size))
-    model, note = _choose_model(x, y, q, fixed, least)
+    frontier, model, note = frontier_fit(x, y, q, fixed, options.min_segment_samples, options.frontier_band)
+    xf, yf = x[frontier.mask], y[frontier.mask]
     notes = [note] if note else []
-    spreads = _bootstrap(x, y, q, fixed, model, options)
-    parameters = _estimates(model, fixed, options, spreads, notes, x)
+    spreads = bootstrap(xf, yf, q, fixed, model, options.bootstrap, options.seed)
+    parameters = estimates(model, fixed, options.joint, spreads, notes, xf)
     values = {p.name: p.value for p in parameters}
     envelope = PerformanceEnvelope(joint=options.joint, name=options.name, **values)
-    below = x <= model.split
-    effort_residuals = y[below] - (model.effort - model.resistance * x[below])
-    velocity_residuals = x[~below] - (model.velocity - model.gradient * y[~below])
-    effort_margin, velocity_margin = envelope.margins(x, y)
-    slack = 1e-9
-    outside = (effort_margin < -slack * max(envelope.max_effort, 1.0)) | (
-        velocity_margin
-        < -slack * (envelope.max_actuator_velocity if math.isfinite(envelope.max_actuator_velocity) else 1.0)
-    )
+    notes.extend(_frontier_notes(frontier, pair, x.size))
     if options.bootstrap:
         notes.append(
-            f"uncertainties: {options.bootstrap} bootstrap resamples (a rough scale for a frontier fit)"
+            f"uncertainties: {options.bootstrap} bootstrap resamples of the frontier samples "
+            "(a rough scale for a frontier fit)"
         )
+    return _result(envelope, parameters, model, frontier, x, y, pair, tuple(notes))
+
+
+def _result(
+    envelope: PerformanceEnvelope,
+    parameters: tuple[ParameterEstimate, ...],
+    model: Model,
+    frontier: Frontier,
+    x: FloatArray,
+    y: FloatArray,
+    pair: npt.NDArray[np.int8],
+    notes: tuple[str, ...],
+) -> FitResult:
+    """The result of a fit: the evidence and residuals of the envelope's own lines (fixed values in)."""
+    final = dataclasses.replace(
+        model,
+        effort=envelope.max_effort,
+        resistance=envelope.velocity_dependent_resistance,
+        velocity=envelope.max_actuator_velocity,
+        gradient=envelope.speed_effort_gradient,
+    )
+    xf, yf = x[frontier.mask], y[frontier.mask]
+    eq1 = final.on_eq1(xf, yf)
     return FitResult(
         envelope=envelope,
         parameters=parameters,
         samples=int(x.size),
-        samples_outside=int(np.count_nonzero(outside)),
-        effort_residuals=effort_residuals,
-        velocity_residuals=velocity_residuals,
-        notes=tuple(notes),
+        samples_outside=_count_outside(envelope, x, y),
+        frontier_samples=int(xf.size),
+        frontier_band=frontier.band,
+        set_aside=frontier.set_aside,
+        lines=line_evidence(final, x, y, pair, frontier.mask),
+        effort_residuals=yf[eq1] - (final.effort - final.resistance * xf[eq1]),
+        velocity_residuals=xf[~eq1] - (final.velocity - final.gradient * yf[~eq1]),
+        notes=notes,
     )
 
 
-def _bootstrap(
-    x: FloatArray, y: FloatArray, q: float, fixed: Mapping[str, float], model: _Model, options: FitOptions
-) -> dict[str, FloatArray]:
-    """Parameter values over bootstrap resamples, refitted with the main fit's structure."""
-    if not options.bootstrap:
-        return {}
-    rng = np.random.default_rng(options.seed)
-    rows = []
-    for _ in range(options.bootstrap):
-        pick = rng.integers(0, x.size, x.size)
-        xs, ys = x[pick], y[pick]
-        split = model.split
-        if math.isfinite(split) and not (np.any(xs <= split) and np.any(xs > split)):
-            continue  # a resample that lost one side entirely cannot place that line
-        refit = _fit_structure(xs, ys, q, fixed, split)
-        rows.append((refit.effort, refit.velocity, refit.resistance, refit.gradient))
-    if len(rows) < 2:
-        return {}
-    table = np.array(rows)
-    return dict(zip(ENVELOPE_FIELDS, table.T, strict=True))
+def _count_outside(envelope: PerformanceEnvelope, x: FloatArray, y: FloatArray) -> int:
+    """Samples outside the envelope by more than 1e-9 of its caps (rounding is not outside)."""
+    effort_margin, velocity_margin = envelope.margins(x, y)
+    speed = envelope.max_actuator_velocity
+    slack = 1e-9
+    outside = (effort_margin < -slack * max(envelope.max_effort, 1.0)) | (
+        velocity_margin < -slack * (speed if math.isfinite(speed) else 1.0)
+    )
+    return int(np.count_nonzero(outside))
 
 
-_UNIDENTIFIED = {
-    "max_actuator_velocity": "the data never reach the speed limit: reported as inf",
-    "velocity_dependent_resistance": "the samples on eq. 1 span no speed range: 0 assumed",
-    "speed_effort_gradient": "the samples on eq. 2 span no effort range: 0 assumed (a vertical speed limit)",
-}
-
-
-def _estimates(
-    model: _Model,
-    fixed: Mapping[str, float],
-    options: FitOptions,
-    spreads: dict[str, FloatArray],
-    notes: list[str],
-    x: FloatArray,
-) -> tuple[ParameterEstimate, ...]:
-    """One :class:`ParameterEstimate` per field; appends identifiability remarks to ``notes``."""
-    two_lines = math.isfinite(model.split)
-    values = {
-        "max_effort": max(model.effort, 0.0),
-        "max_actuator_velocity": model.velocity
-        if two_lines
-        else fixed.get("max_actuator_velocity", math.inf),
-        "velocity_dependent_resistance": model.resistance,
-        "speed_effort_gradient": model.gradient if two_lines else fixed.get("speed_effort_gradient", 0.0),
-    }
-    identified = {
-        "max_effort": True,
-        "max_actuator_velocity": two_lines,
-        "velocity_dependent_resistance": model.resistance_identified,
-        "speed_effort_gradient": two_lines and model.gradient_identified,
-    }
-    estimates = []
-    for name in ENVELOPE_FIELDS:
-        spread = None
-        status: ParameterStatus
-        if name in fixed:
-            status, note = "fixed", "fixed by the user"
-        elif not identified[name]:
-            status, note = (
-                "unidentified",
-                _UNIDENTIFIED[name] if two_lines or name != "speed_effort_gradient" else "",
-            )
-            if name != "max_actuator_velocity" and note:  # the speed limit has its own note already
-                notes.append(f"{name} not identified: {note}")
-        else:
-            status, note, spread = "fitted", "", spreads.get(name)
-            if name == "max_effort":
-                note = _extrapolation_note(x[x <= model.split], float(x.max()), options.joint)
-                notes.extend([f"max_effort {note}"] if note else [])
-        estimates.append(
-            ParameterEstimate(
-                name=name,
-                value=fixed.get(name, values[name]),
-                unit=si_unit(name, options.joint),
-                status=status,
-                std=None if spread is None else float(np.std(spread, ddof=1)),
-                interval=None
-                if spread is None
-                else (float(np.percentile(spread, 2.5)), float(np.percentile(spread, 97.5))),
-                note=note,
-            )
+def _frontier_notes(frontier: Frontier, pair: npt.NDArray[np.int8], total: int) -> list[str]:
+    """What the frontier left out, and spikes set aside."""
+    notes = []
+    kept = int(np.count_nonzero(frontier.mask))
+    if kept < total:
+        driving = int(np.count_nonzero(pair[frontier.mask] > 0))
+        braking = int(np.count_nonzero(pair[frontier.mask] < 0))
+        inside = total - kept
+        rest = "the other sample lies" if inside == 1 else f"the other {inside} lie"
+        notes.append(
+            f"frontier: {kept} of {total} samples lie within {frontier.band:.3g} of the upper hull "
+            f"({driving} driving, {braking} braking) and were fitted; {rest} inside, where the drive "
+            "was not saturated"
         )
-    return tuple(estimates)
-
-
-def _extrapolation_note(speeds: FloatArray, top_speed: float, joint: JointType) -> str:
-    """A note when max_effort is extrapolated: no eq. 1 sample within 5 % of the top speed of zero."""
-    low = float(speeds.min()) if speeds.size else 0.0
-    if low <= 0.05 * top_speed:
-        return ""
-    return (
-        f"extrapolated to zero speed from |velocity| >= {low:.6g} {si_unit('max_actuator_velocity', joint)}"
-    )
+    if frontier.set_aside:
+        notes.append(
+            f"{frontier.set_aside} samples standing clear above the others were left out of the hull "
+            "(spikes); the outlier allowance covers them"
+        )
+    return notes

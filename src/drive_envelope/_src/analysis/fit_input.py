@@ -37,13 +37,20 @@ def check_count(name: str, value: object, high: int | None) -> None:
         raise InputError(f"{name}: expected an integer {span}, got {value!r}")
 
 
-def fit_samples_input(velocity: npt.ArrayLike, effort: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """``|velocity|`` and ``|effort|`` as flat float64 arrays, validated for a fit."""
+def fit_samples_input(
+    velocity: npt.ArrayLike, effort: npt.ArrayLike
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.int8]]:
+    """``|velocity|``, ``|effort|`` and their quadrant pair as flat arrays, validated for a fit.
+
+    The pair is ``sign(velocity) * sign(effort)``: 1 driving (quadrants I and III), -1 braking (II
+    and IV), 0 when either is 0.
+    """
     try:
-        x = np.abs(np.asarray(velocity, dtype=np.float64)).ravel()
-        y = np.abs(np.asarray(effort, dtype=np.float64)).ravel()
+        v = np.asarray(velocity, dtype=np.float64).ravel()
+        e = np.asarray(effort, dtype=np.float64).ravel()
     except (TypeError, ValueError) as exc:
         raise InputError(f"fit: expected arrays of numbers for velocity and effort ({exc})") from None
+    x, y = np.abs(v), np.abs(e)
     if x.shape != y.shape:
         raise InputError(
             f"fit: velocity and effort must have the same number of samples, got {x.size} and {y.size}"
@@ -68,4 +75,6 @@ def fit_samples_input(velocity: npt.ArrayLike, effort: npt.ArrayLike) -> tuple[F
                 f"{MIN_SCALE:g} (check the log's units)"
             )
         values[values < RESOLUTION * largest] = 0.0  # x, y are fresh arrays: the caller's data is kept
-    return x, y
+    pair = (np.sign(v) * np.sign(e)).astype(np.int8)
+    pair[(x == 0.0) | (y == 0.0)] = 0
+    return x, y, pair

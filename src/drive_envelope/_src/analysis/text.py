@@ -8,6 +8,7 @@ from pathlib import Path
 
 from drive_envelope._src.analysis.check import CheckReport, JointCheck, MarginSummary
 from drive_envelope._src.analysis.fit import FitResult
+from drive_envelope._src.analysis.fit_evidence import sample_ranges
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.params.table import si_unit
@@ -93,7 +94,7 @@ def format_check(report: CheckReport) -> str:
 
 
 def format_fit(result: FitResult) -> str:
-    """The fit as text: parameters with uncertainties, residuals and notes."""
+    """The fit as text: parameters, the samples that decided each line, residuals and notes."""
     rows = []
     for p in result.parameters:
         interval = "-" if p.interval is None else f"[{p.interval[0]:.6g}, {p.interval[1]:.6g}]"
@@ -109,10 +110,14 @@ def format_fit(result: FitResult) -> str:
         )
     env = result.envelope
     lines = [
-        f"fitted envelope ({env.joint}) from {result.samples} samples, {result.samples_outside} outside",
+        f"fitted envelope ({env.joint}) from {result.samples} samples, {result.samples_outside} outside; "
+        f"{result.frontier_samples} on the frontier (within {result.frontier_band:.3g} of the upper hull)",
         format_table(["parameter", "value", "std", "95 % interval", "unit", "status"], rows),
         "",
-        "residuals (positive: outside the fitted line)",
+        "lines, decided by the samples on them (within 1 % of the cap)",
+        _lines_table(result),
+        "",
+        "residuals of the frontier samples (positive: outside the fitted line)",
     ]
     residual_rows = []
     for label, values, unit in (
@@ -129,6 +134,40 @@ def format_fit(result: FitResult) -> str:
     lines.append(format_table(["line", "samples", "rms", "max"], residual_rows))
     lines.extend(f"note: {note}" for note in result.notes)
     return "\n".join(lines)
+
+
+_SHOWN_RUNS = 4  # runs of sample numbers a text report lists per line (JSON lists them all)
+
+
+def _lines_table(result: FitResult) -> str:
+    """One row per line: on-line samples by quadrant pair, their ranges and sample numbers."""
+    joint = result.envelope.joint
+    speed, effort = si_unit("max_actuator_velocity", joint), si_unit("max_effort", joint)
+    rows = []
+    for line in result.lines:
+        runs = sample_ranges(line.on_line)
+        numbers = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs[:_SHOWN_RUNS])
+        numbers += f", ... ({len(runs)} runs)" if len(runs) > _SHOWN_RUNS else ""
+        rows.append(
+            [
+                _CURVE_TITLES[line.curve],
+                "fitted" if line.identified else "not identified",
+                str(line.bounded),
+                str(line.on_line.size),
+                str(line.driving),
+                str(line.braking),
+                _span(line.velocity_range),
+                _span(line.effort_range),
+                numbers or "-",
+            ]
+        )
+    header = ["line", "status", "bounds", "on line", "driving", "braking"]
+    header += [f"|velocity| [{speed}]", f"|effort| [{effort}]", "samples"]
+    return format_table(header, rows)
+
+
+def _span(extent: tuple[float, float] | None) -> str:
+    return "-" if extent is None else f"{format_value(extent[0])} .. {format_value(extent[1])}"
 
 
 def plot_check(report: CheckReport, path: str | os.PathLike[str], *, force: bool = False) -> list[Path]:

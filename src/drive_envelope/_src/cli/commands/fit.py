@@ -24,8 +24,11 @@ def register(subparsers: Any) -> None:
         description=(
             "Estimate max_effort, max_actuator_velocity, velocity_dependent_resistance and "
             "speed_effort_gradient as the tightest envelope of the spec's form containing the samples (up "
-            "to --outlier-quantile), with bootstrap uncertainties and residuals. A limit the data never "
-            "reach is reported as unidentified (max_actuator_velocity = inf), not guessed."
+            "to --outlier-quantile), with bootstrap uncertainties and residuals. Only the frontier is "
+            "fitted (the samples on or near the upper hull of |effort| over |velocity|), and the report "
+            "says which samples decided each line. A limit the data never reach is reported as "
+            "unidentified (max_actuator_velocity = inf), not guessed; one line that reaches zero effort "
+            "is the speed-torque line (eq. 2)."
         ),
     )
     source = parser.add_mutually_exclusive_group(required=True)
@@ -54,6 +57,14 @@ def register(subparsers: Any) -> None:
         help="fraction of samples allowed outside (default 0: contain all; 0.5: central line through noise)",
     )
     parser.add_argument(
+        "--frontier-band",
+        type=_band,
+        default=None,
+        metavar="B",
+        help="fit the samples within this fraction of the upper hull, in (0, 1]; 1: every sample "
+        "(default: the hull's own samples, or 0.01 widened to the noise with --outlier-quantile)",
+    )
+    parser.add_argument(
         "--bootstrap",
         type=integer_at_least(0, 10_000),
         default=200,
@@ -80,6 +91,17 @@ def _quantile(text: str) -> float:
         value = float("nan")
     if not 0.0 <= value <= 0.5:
         raise argparse.ArgumentTypeError(f"expected a fraction in [0, 0.5], got {text!r}")
+    return value
+
+
+def _band(text: str) -> float:
+    """Argument type of ``--frontier-band``: a fraction in (0, 1]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a fraction in (0, 1], got {text!r}")
     return value
 
 
@@ -133,6 +155,7 @@ def _run(args: argparse.Namespace) -> int:
         fixed=_fixed(args.fix, args.joint),
         bootstrap=args.bootstrap,
         seed=args.seed,
+        frontier_band=args.frontier_band,
         name=args.name,
     )
     columns = columns_from_args(args)
