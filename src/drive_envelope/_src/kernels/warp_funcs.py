@@ -29,6 +29,7 @@ __all__ = [
     "clamp_effort_func",
     "clamp_effort_implicit_func",
     "effort_limit_func",
+    "implicit_drive_impulse",
 ]
 
 # no fused multiply-add: dev = x0*r - v0 must round twice, as in PhysX's CPU build and NumPy (NVRTC
@@ -339,6 +340,32 @@ def clamp_effort_implicit_func(
         velocity_dependent_resistance,
         type(dt)(_EPS) * dt,
     )
+
+
+@wp.func
+def implicit_drive_impulse(
+    stiffness: wp.float64,
+    damping: wp.float64,
+    position_error: wp.float64,
+    velocity: wp.float64,
+    target_velocity: wp.float64,
+    response: wp.float64,
+    dt: wp.float64,
+    acceleration: int,
+):
+    """Unclamped impulse [N*m*s or N*s] of PhysX's implicit PD drive (``ImplicitDriveEffort`` * dt).
+
+    J = (dt*k*err + dt*c*vt - a*v) / (1 + a*r), a = dt*(dt*k + c), so that J = dt*k*(err - dt*v1)
+    + dt*c*(vt - v1) at v1 = v + r*J; 0 when r <= 0 (a DOF that does not respond); an acceleration
+    drive divides by (1 + a)*r instead (gains per unit inertia).
+    """
+    a = dt * (dt * stiffness + damping)
+    rhs = dt * stiffness * position_error + dt * damping * target_velocity - a * velocity
+    if acceleration != 0:
+        return rhs / ((wp.float64(1.0) + a) * response)
+    if response > wp.float64(0.0):
+        return (wp.float64(1.0) / (wp.float64(1.0) + a * response)) * rhs
+    return wp.float64(0.0)
 
 
 @wp.kernel(enable_backward=False)

@@ -16,7 +16,7 @@ the slot offsets. The clamp is the library's one Warp clamp, ``clamp_drive_impul
 
 import warp as wp
 
-from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func
+from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_impulse
 
 # x*r - v0 must round twice, as in the clamp's other backends (see kernels/warp_funcs.py)
 wp.set_module_options({"fuse_fp": False})
@@ -159,32 +159,6 @@ def _inside(
     effort_ok = wp.isinf(xmax) or xmax - work[p + 2, w] * dt * av - ax > _MARGIN * xmax
     speed_ok = wp.isinf(vmax) or vmax - work[p + 3, w] / dt * ax - av > _MARGIN * vmax
     return effort_ok and speed_ok
-
-
-@wp.func
-def implicit_drive_impulse(
-    stiffness: wp.float64,
-    damping: wp.float64,
-    position_error: wp.float64,
-    velocity: wp.float64,
-    target_velocity: wp.float64,
-    response: wp.float64,
-    dt: wp.float64,
-    acceleration: int,
-):
-    """Unclamped impulse [N*m*s or N*s] of PhysX's implicit PD drive (``ImplicitDriveEffort`` * dt).
-
-    J = (dt*k*err + dt*c*vt - a*v) / (1 + a*r), a = dt*(dt*k + c), so that J = dt*k*(err - dt*v1)
-    + dt*c*(vt - v1) at v1 = v + r*J; 0 when r <= 0 (a DOF that does not respond); an acceleration
-    drive divides by (1 + a)*r instead (gains per unit inertia).
-    """
-    a = dt * (dt * stiffness + damping)
-    rhs = dt * stiffness * position_error + dt * damping * target_velocity - a * velocity
-    if acceleration != 0:
-        return rhs / ((wp.float64(1.0) + a) * response)
-    if response > wp.float64(0.0):
-        return (wp.float64(1.0) / (wp.float64(1.0) + a * response)) * rhs
-    return wp.float64(0.0)
 
 
 @wp.func
