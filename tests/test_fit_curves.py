@@ -50,6 +50,10 @@ MIT2007 = [
     (f"{24000.0 * (1.0 - 2.0 / 7.0)!r} rpm", "2.0 mN*m"),  # on the 6 V line at 2.0 mN*m
     ("24000 rpm", "0 mN*m"),
 ]
+# constructed, not published: 2 % per 1000 rpm of losses up to 2000 rpm, then a back-EMF line from
+# 0.96 N*m to 0 at 3000 rpm (the loss slope before the knee is k_tau_v, the rest is eq. 2)
+KNEE = [("0 rpm", "1.00 N*m"), ("1000 rpm", "0.98 N*m"), ("2000 rpm", "0.96 N*m")]
+KNEE += [("2500 rpm", "0.48 N*m"), ("3000 rpm", "0 N*m")]
 # constructed, not published: a loss line (5 % drop per 2500 rpm) that never reaches zero effort
 LOSS_LINE = [("0 rpm", "100 mN*m"), ("2500 rpm", "95 mN*m"), ("5000 rpm", "90 mN*m")]
 
@@ -121,10 +125,7 @@ def test_current_limited_dc_motor_curve_has_both_lines(tmp_path: Path) -> None:
 
 def test_only_the_drop_eq2_does_not_explain_goes_into_resistance(tmp_path: Path) -> None:
     """Give k_tau_v the slope of the part above the speed-torque line, eq. 2 the rest (constructed curve)."""
-    # 2 % per 1000 rpm of losses up to 2000 rpm, then a back-EMF line from 0.96 N*m to 0 at 3000 rpm
-    points = [("0 rpm", "1.00 N*m"), ("1000 rpm", "0.98 N*m"), ("2000 rpm", "0.96 N*m")]
-    points += [("2500 rpm", "0.48 N*m"), ("3000 rpm", "0 N*m")]
-    env = fit_curve(curve_file(tmp_path / "two.csv", points)).envelope
+    env = fit_curve(curve_file(tmp_path / "two.csv", KNEE)).envelope
     assert env.max_effort == pytest.approx(1.0, rel=1e-9)
     assert env.velocity_dependent_resistance == pytest.approx(0.02 / (1000 * RPM), rel=1e-9)
     assert env.max_actuator_velocity == pytest.approx(3000 * RPM, rel=1e-9)
@@ -133,8 +134,8 @@ def test_only_the_drop_eq2_does_not_explain_goes_into_resistance(tmp_path: Path)
 
 @pytest.mark.parametrize(
     "points",
-    [ISSUE18, MM_C21, MM_S28, MIT2007, LOSS_LINE],
-    ids=["issue18-c21", "magmotor-c21-36v", "magmotor-s28", "mit2007-rc260", "loss-line"],
+    [ISSUE18, MM_C21, MM_S28, MIT2007, LOSS_LINE, KNEE],
+    ids=["issue18-c21", "magmotor-c21-36v", "magmotor-s28", "mit2007-rc260", "loss-line", "knee"],
 )
 def test_fit_and_derive_read_the_same_points_the_same_way(
     tmp_path: Path, points: list[tuple[str, str]]
@@ -143,9 +144,15 @@ def test_fit_and_derive_read_the_same_points_the_same_way(
     derivation = derivation_of(points)
     result = fit_curve(curve_file(tmp_path / "points.csv", points))
     env = result.envelope
-    if derivation.velocity_dependent_resistance_method == "speed_torque_line":
+    method = derivation.velocity_dependent_resistance_method
+    if method == "speed_torque_line":
         assert derivation.envelope.velocity_dependent_resistance == 0.0
         assert env.velocity_dependent_resistance == pytest.approx(0.0, abs=1e-12)
+        assert math.isfinite(env.max_actuator_velocity)
+    elif method == "fitted_before_knee":  # both lines: the same loss slope before the knee
+        assert env.velocity_dependent_resistance == pytest.approx(
+            derivation.envelope.velocity_dependent_resistance, rel=1e-9, abs=1e-12
+        )
         assert math.isfinite(env.max_actuator_velocity)
     else:  # a loss line: both give its slope (the points are collinear) and no speed limit from it
         assert derivation.velocity_dependent_resistance_method == "fitted"
@@ -155,6 +162,10 @@ def test_fit_and_derive_read_the_same_points_the_same_way(
         assert math.isinf(env.max_actuator_velocity)
     if points is LOSS_LINE:  # 10 mN*m per 5000 rpm, by hand
         assert env.velocity_dependent_resistance == pytest.approx(10 * MNM / (5000 * RPM), rel=1e-9)
+    if points is KNEE:  # 0.02 N*m per 1000 rpm before the knee, by hand, in both
+        assert derivation.envelope.velocity_dependent_resistance == pytest.approx(
+            0.02 / (1000 * RPM), rel=1e-9
+        )
 
 
 def test_catalog_c21_table_gives_the_gradient_derive_uses(tmp_path: Path) -> None:

@@ -112,7 +112,7 @@ def test_demo_swing_identifies_the_speed_limit_check_sees() -> None:
 
 @settings(max_examples=25, deadline=None)
 @given(
-    corner=st.floats(0.05, 0.95),
+    corner=st.floats(0.1, 0.95),  # knees nearer standstill: see docs/analysis.md, limits
     drop=st.floats(0.0, 0.75),
     max_effort=st.floats(0.5, 500.0),
     speed=st.floats(0.5, 500.0),

@@ -47,6 +47,18 @@ struct Bounds {
   T upper;
 };
 
+// (a + b) / denom; in the guard, where a + b overflows although a and b are finite (operands near
+// the float range's end), a / denom + b / denom instead, which does not: PhysX's form would turn a
+// finite bound into an infinite one and lose the curve
+template <typename T, bool kExact>
+inline T Quotient(T a, T b, T denom) {
+  T sum = a + b;
+  if (!kExact && std::isinf(sum) && std::isfinite(a) && std::isfinite(b)) {
+    return a / denom + b / denom;
+  }
+  return sum / denom;
+}
+
 // feasible [lower, upper] of a positive request against |v| <= max - k*|x|; kExact: PhysX's
 // arithmetic (FLT_MAX sentinels, select semantics), else the guard: inf sentinels, NaN-carrying
 // selects, and a NaN lower bound when a flat curve says no (the clamp then returns 0)
@@ -60,7 +72,7 @@ inline Bounds<T> BoundsPositive(T dev, T max, T denom1, T denom2, T impulse) {
 
   // denom1 ~ 0: the lower curve is a yes/no test on (dev - max)
   if (std::fabs(denom1) < eps) {
-    T bound2 = (dev + max) / denom2;
+    T bound2 = Quotient<T, kExact>(dev, max, denom2);
     if (!kExact) {
       bool yes = std::fabs(dev - max) < eps || (dev - max) <= zero;
       return {yes ? zero : std::numeric_limits<T>::quiet_NaN(), bound2};
@@ -68,8 +80,8 @@ inline Bounds<T> BoundsPositive(T dev, T max, T denom1, T denom2, T impulse) {
     T bound1 = std::fabs(dev - max) < eps ? -big : ((dev - max) > zero ? big : -big);
     return {PxMax(zero, bound1), bound2};
   }
-  T bound1 = (dev - max) / denom1;
-  T bound2 = (dev + max) / denom2;
+  T bound1 = Quotient<T, kExact>(dev, -max, denom1);
+  T bound2 = Quotient<T, kExact>(dev, max, denom2);
   if (kExact) {
     if (denom1 >= zero) return {PxMax(zero, bound1), PxMin(bound2, impulse)};
     return {zero, PxMin(PxMin(bound1, bound2), impulse)};
@@ -85,7 +97,7 @@ inline Bounds<T> BoundsNegative(T dev, T max, T denom1, T denom2, T impulse) {
   const T big = kExact ? static_cast<T>(kPxMax) : std::numeric_limits<T>::infinity();
   if (std::fabs(denom1) < eps) return {-big, big};
   if (std::fabs(denom2) < eps) {
-    T bound1 = (dev - max) / denom1;
+    T bound1 = Quotient<T, kExact>(dev, -max, denom1);
     if (!kExact) {
       bool yes = std::fabs(dev + max) < eps || (dev + max) >= zero;
       return {bound1, yes ? zero : std::numeric_limits<T>::quiet_NaN()};
@@ -93,8 +105,8 @@ inline Bounds<T> BoundsNegative(T dev, T max, T denom1, T denom2, T impulse) {
     T bound2 = std::fabs(dev + max) < eps ? big : ((dev + max) > zero ? big : -big);
     return {bound1, PxMin(zero, bound2)};
   }
-  T bound1 = (dev - max) / denom1;
-  T bound2 = (dev + max) / denom2;
+  T bound1 = Quotient<T, kExact>(dev, -max, denom1);
+  T bound2 = Quotient<T, kExact>(dev, max, denom2);
   if (kExact) {
     if (denom2 >= zero) return {PxMax(bound1, impulse), PxMin(zero, bound2)};
     return {PxMax(PxMax(bound1, bound2), impulse), zero};

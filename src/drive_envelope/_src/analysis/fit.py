@@ -50,8 +50,8 @@ from drive_envelope._src.analysis.fit_estimates import (
 from drive_envelope._src.analysis.fit_evidence import FitLine, line_evidence
 from drive_envelope._src.analysis.fit_frontier import Frontier
 from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
-from drive_envelope._src.analysis.fit_model import Model
 from drive_envelope._src.analysis.fit_rounds import frontier_fit
+from drive_envelope._src.envelope.line_model import Model
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 

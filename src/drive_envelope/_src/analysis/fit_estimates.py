@@ -10,7 +10,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.fit_model import STANDSTILL, Model, fit_structure
+from drive_envelope._src.envelope.line_model import STANDSTILL, Model, fit_structure
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType
 from drive_envelope._src.params.table import si_unit
 

@@ -9,8 +9,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.fit_choice import ON_LINE
-from drive_envelope._src.analysis.fit_model import Model
+from drive_envelope._src.envelope.line_choice import ON_LINE
+from drive_envelope._src.envelope.line_model import Model
 
 __all__ = ["MAX_JSON_RANGES", "FitLine", "line_evidence", "sample_ranges"]
 

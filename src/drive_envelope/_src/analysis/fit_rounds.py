@@ -17,7 +17,6 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.fit_choice import choose_model
 from drive_envelope._src.analysis.fit_frontier import (
     DEFAULT_BAND,
     ON_HULL,
@@ -25,7 +24,8 @@ from drive_envelope._src.analysis.fit_frontier import (
     clean_hull,
     select_frontier,
 )
-from drive_envelope._src.analysis.fit_model import Model, line_residuals
+from drive_envelope._src.envelope.line_choice import choose_model
+from drive_envelope._src.envelope.line_model import Model, line_residuals
 
 __all__ = ["frontier_fit"]
 

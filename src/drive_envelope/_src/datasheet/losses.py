@@ -9,6 +9,11 @@ A curve that falls to zero effort within its own speed range is not a loss line:
 speed-torque line of eq. 2 (the back-EMF line of a motor at fixed voltage, which a DC motor's
 published curve usually is), whose slope is speed_effort_gradient. Putting it into k_tau_v would
 count the back-EMF drop twice, so such points give k_tau_v = 0 with a note saying why.
+
+A curve with a knee (losses at low speed, then the back-EMF drop to no load) holds both lines: k_tau_v
+is the slope of the part before the knee only. The knee is found by the same chooser ``fit
+--from-curve`` uses (:mod:`drive_envelope._src.envelope.line_choice`), so both read one curve the
+same way.
 """
 
 from __future__ import annotations
@@ -18,21 +23,26 @@ import math
 import numpy as np
 
 from drive_envelope._src.datasheet.context import DeriveContext
+from drive_envelope._src.envelope.line_choice import REACH, choose_model
 from drive_envelope._src.errors import InputError
 
 __all__ = ["resistance"]
 
 _ZERO_EFFORT = 0.01
 """A point below this fraction of the curve's largest effort counts as zero effort (a no-load point)."""
-_REACH = 1.05
-"""A fitted line that reaches zero effort within this factor of the largest speed is a speed-torque line."""
+_REACH = REACH
+"""A fitted line that reaches zero effort within this factor of the largest speed is a speed-torque line
+(the factor ``fit --from-curve`` uses)."""
+_ON_HULL = 1e-4
+"""Digitized points lie on the curve: the chooser's band for points on the boundary."""
 
 
 def resistance(ctx: DeriveContext) -> tuple[float, str]:
     """k_tau_v at the joint [N*m*s/rad or N*s/m] and its method.
 
-    The method is ``direct``, ``fitted``, ``speed_torque_line`` (the operating points are the
-    speed-torque line, so 0) or ``none``.
+    The method is ``direct``, ``fitted``, ``fitted_before_knee`` (the points bend into the
+    speed-torque line: the slope before the knee), ``speed_torque_line`` (the operating points are
+    the speed-torque line, so 0) or ``none``.
     """
     losses, output = ctx.sheet.losses, ctx.sheet.output
     direct = losses.velocity_dependent_resistance if losses else None
@@ -71,6 +81,16 @@ def _fitted(ctx: DeriveContext, points: tuple[tuple[float, float], ...]) -> tupl
             "out of range (check the gear ratio and the points' units)"
         )
     ctx.provenance["velocity_dependent_resistance"] = "derived"
+    knee = _knee(speeds, efforts)
+    if knee is not None:
+        below = speeds <= knee
+        value = _least_squares_resistance(speeds[below], efforts[below])
+        ctx.notes.append(
+            f"losses.operating_points bend at {knee:.6g} {ctx.units['joint_speed']}: above it they are the "
+            "speed-torque line of eq. 2, so velocity_dependent_resistance is the slope of the "
+            f"{int(np.count_nonzero(below))} points below it only"
+        )
+        return value, "fitted_before_knee"
     # ordinary least squares of effort on speed at the joint; the resistance is minus the slope
     centred = speeds - speeds.mean()
     slope = float(np.dot(centred, efforts - efforts.mean()) / np.dot(centred, centred))
@@ -104,3 +124,27 @@ def _fitted(ctx: DeriveContext, points: tuple[tuple[float, float], ...]) -> tupl
         "joint: motor speeds / i_G, torques x i_G * eta_G)"
     )
     return value, "fitted"
+
+
+def _knee(speeds: np.ndarray, efforts: np.ndarray) -> float | None:
+    """The speed where a loss line turns into the speed-torque line, or None (one line).
+
+    Points at one speed or two lines that the chooser does not support give None; so do knees with
+    fewer than two points below them (no slope to take).
+    """
+    if speeds.size < 4:
+        return None
+    model, _, _ = choose_model(speeds, efforts, 0.0, {}, 2, _ON_HULL)
+    if model.lines != "both" or np.count_nonzero(speeds <= model.split) < 2:
+        return None
+    return float(model.split)
+
+
+def _least_squares_resistance(speeds: np.ndarray, efforts: np.ndarray) -> float:
+    """Minus the least-squares slope of effort on speed, at least 0 [N*m*s/rad or N*s/m]."""
+    centred = speeds - speeds.mean()
+    denominator = float(np.dot(centred, centred))
+    if denominator == 0.0:
+        return 0.0
+    slope = float(np.dot(centred, efforts - efforts.mean()) / denominator)
+    return max(-slope, 0.0)

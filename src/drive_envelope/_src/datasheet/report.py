@@ -72,6 +72,7 @@ _RESISTANCE_WORDS = {
     "direct": "given directly",
     "fitted": "fitted from operating points",
     "speed_torque_line": "the operating points are the speed-torque line (eq. 2): 0",
+    "fitted_before_knee": "fitted from the operating points before they bend into the speed-torque line",
     "none": "no loss data: 0",
 }
 

@@ -68,7 +68,7 @@ class Derivation:
     speed_effort_gradient_reason: str
     """Why that method, in one sentence."""
     velocity_dependent_resistance_method: str
-    """direct | fitted | speed_torque_line | none."""
+    """direct | fitted | fitted_before_knee | speed_torque_line | none."""
     provenance: Mapping[str, ParamSource] = field(default_factory=dict)
     """Where each envelope parameter and each input came from (``section.key`` or parameter name)."""
     notes: tuple[str, ...] = ()

@@ -285,7 +285,13 @@ class _Signs(NamedTuple):
 
 
 def _bounds(
-    num1: Array, num2: Any, denom1: Any, denom2: Any, request: Array, signs: _Signs | None
+    num1: Array,
+    num2: Any,
+    denom1: Any,
+    denom2: Any,
+    request: Array,
+    signs: _Signs | None,
+    parts: tuple[Array, Any] | None = None,
 ) -> tuple[Array, Array, bool]:
     """``computeBoundsForPositiveImpulse`` on sign-normalized inputs: feasible ``[lower, upper]``.
 
@@ -306,6 +312,10 @@ def _bounds(
     eps, zero = real(PX_EPS_F32), real(0.0)
     bound1 = np.true_divide(num1, denom1)
     bound2 = _into(np.true_divide, num2, denom2)
+    if parts is not None:
+        dev, limit = parts
+        bound1 = _split_overflow(bound1, num1, dev, np.negative(limit), denom1)
+        bound2 = _split_overflow(bound2, num2, dev, limit, denom2)
     rising = _mask(np.greater_equal(denom1, zero), real)
     if signs is None:
         nan_free = True
@@ -338,6 +348,22 @@ def _bounds(
         lower = np.where(ignored, -big, lower)
         upper = np.where(ignored, big, upper)
     return lower, upper, nan_free
+
+
+def _split_overflow(bound: Array, num: Array, a: Array, b: Any, denom: Any) -> Array:
+    """``(a + b) / denom``, as ``a/denom + b/denom`` where ``a + b`` overflowed with ``a``, ``b`` finite.
+
+    PhysX's form turns a finite bound into an infinite one there (operands near the end of the float
+    range), which loses the curve; the split form does not. One reduction finds the common case
+    (no infinity) cheaply. The same rule, in the same operations, is in every backend.
+    """
+    if np.isfinite(np.add.reduce(num, axis=None)):
+        return bound
+    over = np.isinf(num) & np.isfinite(a) & np.isfinite(b)
+    if not np.any(over):
+        return bound
+    split = np.true_divide(a, denom) + np.true_divide(b, denom)
+    return np.where(over, split, bound)
 
 
 def _numerators(dev: Array, limit: Any, signs: _Signs | None) -> tuple[Array, Array]:
@@ -386,7 +412,8 @@ def _clamp(
         request = np.bitwise_xor(_bits(x, real), sign_bit).view(real)  # |x|
         dev = _into(np.bitwise_xor, _bits(dev, real), sign_bit).view(real)
     # eq. 2 (speed-effort line)
-    lo1, hi1, clean1 = _bounds(*_numerators(dev, max_v, signs), r - grad, r + grad, request, signs)
+    parts1 = None if exact else (dev, max_v)
+    lo1, hi1, clean1 = _bounds(*_numerators(dev, max_v, signs), r - grad, r + grad, request, signs, parts1)
     # eq. 1 (effort-speed line) written as |v| <= max_x/R - (1/R)|x|; R = 0 is the box |x| <= max_x
     if exact:
         plain = resist == zero
@@ -398,7 +425,10 @@ def _clamp(
         plain = None
         if not np.isfinite(np.add.reduce(inv_r, axis=None) + np.add.reduce(limit_r, axis=None)):
             plain = ~(np.isfinite(inv_r) & np.isfinite(limit_r))
-    lo2, hi2, clean2 = _bounds(*_numerators(dev, limit_r, signs), r - inv_r, r + inv_r, request, signs)
+    parts2 = None if exact else (dev, limit_r)
+    lo2, hi2, clean2 = _bounds(
+        *_numerators(dev, limit_r, signs), r - inv_r, r + inv_r, request, signs, parts2
+    )
     if signs is not None:
         lo2, hi2 = np.where(plain, -max_x, lo2), np.where(plain, max_x, hi2)
         # no NaN (a NaN max_x shows in the bounds): PhysX's selects are numpy's minima and maxima

@@ -92,16 +92,23 @@ def _bounds(
     request: torch.Tensor,
     negative: torch.Tensor | None,
     zero: torch.Tensor | float,
+    parts: tuple[torch.Tensor, torch.Tensor] | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """``computeBoundsForPositiveImpulse`` on sign-normalized inputs (see ``envelope/clamp.py``).
 
     ``num1``, ``num2`` are the normalized numerators ``s*dev -+ limit``; ``negative`` (exact mode
     only) marks PhysX's negative branch and ``zero`` is its literal 0 as mirrored (``-0.0`` there).
+    ``parts = (s*dev, limit)`` in the default mode: a numerator that overflows although both parts
+    are finite is divided part by part, as in every backend.
     """
     import torch
 
     bound1 = num1 / denom1
     bound2 = num2 / denom2
+    if parts is not None:
+        dev, limit = parts
+        bound1 = _split_overflow(bound1, num1, dev, -limit, denom1)
+        bound2 = _split_overflow(bound2, num2, dev, limit, denom2)
     rising = denom1 >= 0.0
     near = num1.abs() < PX_EPS_F32
     if negative is not None:
@@ -123,6 +130,16 @@ def _bounds(
     upper = torch.where(flat, bound2, upper)
     ignored = denom2.abs() < PX_EPS_F32  # the curve is ignored
     return torch.where(ignored, -big, lower), torch.where(ignored, big, upper)
+
+
+def _split_overflow(
+    bound: torch.Tensor, num: torch.Tensor, a: torch.Tensor, b: torch.Tensor, denom: torch.Tensor
+) -> torch.Tensor:
+    """``(a + b) / denom`` as ``a/denom + b/denom`` where ``a + b`` overflowed with ``a``, ``b`` finite."""
+    import torch
+
+    over = torch.isinf(num) & torch.isfinite(a) & torch.isfinite(b)
+    return torch.where(over, a / denom + b / denom, bound)
 
 
 def _clamp_drive_impulse_tensors(
@@ -162,7 +179,9 @@ def _clamp_drive_impulse_tensors(
             return dev - limit, dev + limit
 
     # eq. 2 (speed-effort line)
-    lo1, hi1 = _bounds(*numerators(max_v), r - grad, r + grad, request, negative, zero)
+    lo1, hi1 = _bounds(
+        *numerators(max_v), r - grad, r + grad, request, negative, zero, None if exact else (dev, max_v)
+    )
     # eq. 1 (effort-speed line) as |v| <= max_x/R - (1/R)|x|; R = 0 is the plain box |x| <= max_x
     if exact:
         plain = resist == 0.0
@@ -171,7 +190,9 @@ def _clamp_drive_impulse_tensors(
     else:  # a resistance whose 1/R or max_x/R overflows acts as R = 0 (so does R = 0)
         inv_r, limit_r = 1.0 / resist, max_x / resist
         plain = ~(torch.isfinite(inv_r) & torch.isfinite(limit_r))
-    lo2, hi2 = _bounds(*numerators(limit_r), r - inv_r, r + inv_r, request, negative, zero)
+    lo2, hi2 = _bounds(
+        *numerators(limit_r), r - inv_r, r + inv_r, request, negative, zero, None if exact else (dev, limit_r)
+    )
     if negative is not None:
         lower = _pmax(lo1, torch.where(plain, -max_x, lo2))
         upper = _pmin(hi1, torch.where(plain, max_x, hi2))

@@ -144,6 +144,20 @@ def _bounds_negative_physx(dev: Any, limit: Any, denom1: Any, denom2: Any, impul
 
 
 @wp.func
+def _quotient(a: Any, b: Any, denom: Any):
+    """(a + b) / denom; where a + b overflows although a and b are finite, a/denom + b/denom.
+
+    PhysX's form turns a finite bound into an infinite one there (operands near the end of the
+    float range) and the curve is lost. The tests are written without calls (x - x == 0: finite;
+    inf - inf is NaN), as Warp's isinf and isfinite are calls on the CPU.
+    """
+    total = a + b
+    if total - total != type(a)(0.0) and a - a == type(a)(0.0) and b - b == type(a)(0.0):
+        return a / denom + b / denom
+    return total / denom
+
+
+@wp.func
 def _bounds_positive(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
     """The guarded ``computeBoundsForPositiveImpulse``: feasible (lower, upper) for a positive request.
 
@@ -157,9 +171,9 @@ def _bounds_positive(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: An
         lower = type(dev)(wp.nan)
         if wp.abs(dev - limit) < eps or (dev - limit) <= zero:
             lower = zero
-        return lower, (dev + limit) / denom2
-    bound1 = (dev - limit) / denom1
-    bound2 = (dev + limit) / denom2
+        return lower, _quotient(dev, limit, denom2)
+    bound1 = _quotient(dev, type(limit)(-1.0) * limit, denom1)
+    bound2 = _quotient(dev, limit, denom2)
     if denom1 >= zero:
         return _max_nan(zero, bound1), _min_nan(bound2, impulse)
     return zero, _min_nan(_min_nan(bound1, bound2), impulse)
@@ -175,9 +189,9 @@ def _bounds_negative(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: An
         upper = type(dev)(wp.nan)
         if wp.abs(dev + limit) < eps or (dev + limit) >= zero:
             upper = zero
-        return (dev - limit) / denom1, upper
-    bound1 = (dev - limit) / denom1
-    bound2 = (dev + limit) / denom2
+        return _quotient(dev, type(limit)(-1.0) * limit, denom1), upper
+    bound1 = _quotient(dev, type(limit)(-1.0) * limit, denom1)
+    bound2 = _quotient(dev, limit, denom2)
     if denom2 >= zero:
         return _max_nan(bound1, impulse), _min_nan(zero, bound2)
     return _max_nan(_max_nan(bound1, bound2), impulse), zero

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.fit_model import Model, fit_structure, losses, model_cost, scan_split
+from drive_envelope._src.envelope.line_model import Model, fit_structure, losses, model_cost, scan_split
 from drive_envelope._src.errors import InputError
 
 __all__ = ["ON_LINE", "REACH", "choose_model"]

@@ -24,7 +24,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.fit_line import fit_line, top
+from drive_envelope._src.envelope.line_fit import fit_line, top
 
 __all__ = [
     "STANDSTILL",
