@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import inspect
 from collections.abc import Callable
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -174,6 +173,8 @@ def simulate(
     check_steps(scenario, max_steps)
     module = engine_module(engine)
     check_loads(scenario, engine, module)
+    import inspect  # here, not at the top: the registry is imported for --help
+
     parameters = inspect.signature(module.simulate).parameters
     options: dict[str, object] = {}
     if progress is not None and "progress" in parameters:
