@@ -20,7 +20,6 @@ import types
 from pathlib import Path
 
 import pytest
-from hypothesis import settings
 
 _MARKER_MODULES = {
     "mujoco": "mujoco",
@@ -108,7 +107,11 @@ def _cuda_available() -> bool:
 
 
 # property tests draw the same examples on every run (a CI failure is reproducible, never a coin
-# toss); a local hunt for new counterexamples: pytest --hypothesis-profile=explore
-settings.register_profile("default", derandomize=True)
-settings.register_profile("explore", derandomize=False)
-settings.load_profile("default")
+# toss); a local hunt for new counterexamples: pytest --hypothesis-profile=explore. The mjlab
+# environment (scripts/test_mjlab.sh) has no hypothesis and no property tests, so none is registered there.
+if _has("hypothesis"):
+    from hypothesis import settings
+
+    settings.register_profile("default", derandomize=True)
+    settings.register_profile("explore", derandomize=False)
+    settings.load_profile("default")
