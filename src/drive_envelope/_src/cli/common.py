@@ -97,6 +97,21 @@ def add_output_argument(
     parser.add_argument("-o", "--output", metavar=metavar, default=None, required=required, help=help)
 
 
+def add_joint_source_arguments(
+    parser: argparse.ArgumentParser, *, joint: tuple[str, str], map_help: str
+) -> None:
+    """Add ``--joint`` | ``--map`` (one required) and ``--datasheet`` | ``--envelope`` (for ``--joint``).
+
+    ``joint`` is the (metavar, help) of ``--joint``: a joint name in MJCF, a prim path in USD.
+    """
+    target = parser.add_mutually_exclusive_group(required=True)
+    target.add_argument("--joint", metavar=joint[0], help=joint[1])
+    target.add_argument("--map", metavar="MAP", help=map_help)
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")
+    source.add_argument("--envelope", metavar="FILE", help="envelope file (with --joint)")
+
+
 def add_format_argument(parser: argparse.ArgumentParser, choices: tuple[str, ...], help: str) -> None:
     """Add ``--format {choices}`` (default the first choice) and ``--json`` for ``--format json``."""
     parser.add_argument(

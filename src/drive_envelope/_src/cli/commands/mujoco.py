@@ -5,7 +5,11 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument, add_output_argument
+from drive_envelope._src.cli.common import (
+    add_format_argument,
+    add_joint_source_arguments,
+    add_output_argument,
+)
 
 
 def register(subparsers: Any) -> None:
@@ -24,17 +28,12 @@ def register(subparsers: Any) -> None:
         "error nothing is written.",
     )
     apply.add_argument("model", metavar="ROBOT.xml", help="MJCF file of the robot (or scene)")
-    target = apply.add_mutually_exclusive_group(required=True)
-    target.add_argument("--joint", metavar="NAME", help="name of one hinge or slide joint")
-    target.add_argument(
-        "--map",
-        metavar="MAP",
-        help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet (as for usd apply), or the "
+    add_joint_source_arguments(
+        apply,
+        joint=("NAME", "name of one hinge or slide joint"),
+        map_help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet (as for usd apply), or the "
         "name of a shipped robot map (drive-envelope catalog --maps)",
     )
-    source = apply.add_mutually_exclusive_group()
-    source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")
-    source.add_argument("--envelope", metavar="FILE", help="envelope file (with --joint)")
     apply.add_argument(
         "--stiffness",
         metavar="K",

@@ -5,7 +5,11 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument, add_output_argument
+from drive_envelope._src.cli.common import (
+    add_format_argument,
+    add_joint_source_arguments,
+    add_output_argument,
+)
 
 
 def register(subparsers: Any) -> None:
@@ -25,17 +29,12 @@ def register(subparsers: Any) -> None:
         "reopened and checked before it replaces any file; on any error nothing is written.",
     )
     apply.add_argument("asset", metavar="ROBOT.usd", help="USD file of the robot (or scene)")
-    target = apply.add_mutually_exclusive_group(required=True)
-    target.add_argument("--joint", metavar="PATH", help="prim path of one joint")
-    target.add_argument(
-        "--map",
-        metavar="MAP",
-        help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet, or a shipped map's name "
+    add_joint_source_arguments(
+        apply,
+        joint=("PATH", "prim path of one joint"),
+        map_help="TOML/JSON/YAML map of joint pattern -> envelope or datasheet, or a shipped map's name "
         "(unitree-go2, franka-fr3, ...)",
     )
-    source = apply.add_mutually_exclusive_group()
-    source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")
-    source.add_argument("--envelope", metavar="FILE", help="envelope file (with --joint)")
     apply.add_argument(
         "--instance",
         metavar="INST",
