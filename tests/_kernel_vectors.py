@@ -93,16 +93,10 @@ def cpp_clamp_library() -> ctypes.CDLL:
 
     Skips the calling test when MuJoCo is not installed.
     """
-    import pytest
+    from _mujoco_plugin import mujoco_with_plugin
+    from drive_envelope._src.adapters.mujoco import loader
 
-    pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
+    mujoco_with_plugin()
     handle = loader.plugin_library()
     for (dtype, _), suffix in CPP_MODES.items():
         kind = ctypes.c_float if dtype is np.float32 else ctypes.c_double

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import InputError, PerformanceEnvelope
 
 pytestmark = [pytest.mark.mujoco, pytest.mark.warp]
@@ -25,18 +26,11 @@ WHEEL = """<mujoco><option timestep="0.01" integrator="Euler" gravity="0 0 0"/>
 @pytest.fixture(scope="module")
 def env() -> Any:
     """(mujoco, mujoco_warp) with the plugin loaded and Warp quiet."""
-    mujoco = pytest.importorskip("mujoco")
+    mujoco = mujoco_with_plugin()
     mjw = pytest.importorskip("mujoco_warp")
     import warp as wp
 
-    from drive_envelope._src.adapters.mujoco import build, loader
-
     wp.config.quiet = True
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)
-        loader.load_plugin()
     return mujoco, mjw
 
 

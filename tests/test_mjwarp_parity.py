@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import PerformanceEnvelope
 
 pytestmark = [pytest.mark.mujoco, pytest.mark.warp]
@@ -45,18 +46,11 @@ INPUTS = """<mujoco><option timestep="0.005" integrator="Euler"/>
 @pytest.fixture(scope="module")
 def env() -> Any:
     """(mujoco, mujoco_warp) with the plugin loaded and Warp quiet."""
-    mujoco = pytest.importorskip("mujoco")
+    mujoco = mujoco_with_plugin()
     mjw = pytest.importorskip("mujoco_warp")
     import warp as wp
 
-    from drive_envelope._src.adapters.mujoco import build, loader
-
     wp.config.quiet = True
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
     return mujoco, mjw
 
 

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import InputError, PerformanceEnvelope
 
 pytestmark = pytest.mark.mujoco
@@ -26,15 +27,7 @@ ARM = """<mujoco><option timestep="0.005" integrator="Euler"/><worldbody>
 
 @pytest.fixture(scope="module")
 def mujoco() -> Any:
-    module = pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
-    return module
+    return mujoco_with_plugin()
 
 
 def _env(**kwargs: Any) -> PerformanceEnvelope:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import PerformanceEnvelope
 
 pytestmark = pytest.mark.mujoco
@@ -31,15 +32,7 @@ GO2 = ROOT.parent / "shared" / "data" / "menagerie" / "go2.xml"
 
 @pytest.fixture(scope="module")
 def mujoco() -> Any:
-    module = pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
-    return module
+    return mujoco_with_plugin()
 
 
 @pytest.fixture(scope="module")

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import InputError
 
 pytestmark = pytest.mark.mujoco
@@ -40,15 +41,7 @@ ENVELOPE = "max_effort = 8.0\nmax_actuator_velocity = 12.147491593880533\nspeed_
 
 @pytest.fixture(scope="module")
 def mujoco() -> Any:
-    module = pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
-    return module
+    return mujoco_with_plugin()
 
 
 @pytest.fixture

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope import PerformanceEnvelope, clamp_effort_implicit, implicit_drive_effort
 from drive_envelope.errors import DriveEnvelopeError
 
@@ -36,15 +37,7 @@ DYNPRM = "10 3 1 0.05 100 5"
 
 @pytest.fixture(scope="module")
 def mujoco() -> Any:
-    module = pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
-    return module
+    return mujoco_with_plugin()
 
 
 def _xml(dynprm: str = DYNPRM, *, joint: str = "hinge", extra: str = "", config: str = "") -> str:

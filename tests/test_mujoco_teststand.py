@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _mujoco_plugin import mujoco_with_plugin
 from drive_envelope.teststand import Scenario, Trajectory, load_scenario, scenario_from_mapping, simulate
 
 pytestmark = pytest.mark.mujoco
@@ -25,14 +26,7 @@ PGS_FILES = sorted(SCENARIOS.glob("*_pgs.toml"))
 
 @pytest.fixture(scope="module", autouse=True)
 def plugin() -> None:
-    pytest.importorskip("mujoco")
-    from drive_envelope._src.adapters.mujoco import build, loader
-
-    try:
-        loader.load_plugin()
-    except build.PluginError:
-        build.build_plugin(quiet=True)  # `make setup` normally built it
-        loader.load_plugin()
+    mujoco_with_plugin()
 
 
 def _assert_agree(scenario: Scenario, mj: Trajectory, ref: Trajectory) -> None:
