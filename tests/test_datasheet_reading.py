@@ -176,20 +176,31 @@ def test_derive_extreme_values_are_a_number_or_one_line(
 def test_derive_tiny_torque_constant_gives_the_hand_values(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """k_t = 1e-100 N*m/A: maxEffort = 24 * 1e-100 * 6 * 0.92, gradient = 0.17 / (1e-100)^2 / 6^2."""
+    """k_t = 1e-15 N*m/A: maxEffort = 24 * 1e-15 * 6 * 0.92, gradient = 0.17 / (1e-15)^2 / 6^2.
+
+    Both stay within float32's normal range (PhysX's); a limit below it is refused (next test).
+    """
     path = write(tmp_path, "ak.yaml", AK80.format(ratio=6))
     assert (
-        main(["derive", str(path), "--set", "motor.torque_constant=1e-100", "--format", "envelope-json"]) == 0
+        main(["derive", str(path), "--set", "motor.torque_constant=1e-15", "--format", "envelope-json"]) == 0
     )
     envelope = json.loads(capsys.readouterr().out)
-    assert envelope["max_effort"] == pytest.approx(24 * 1e-100 * 6 * 0.92, rel=1e-12)
-    assert envelope["speed_effort_gradient"] == pytest.approx(0.17 / 1e-200 / 36, rel=1e-12)
+    assert envelope["max_effort"] == pytest.approx(24 * 1e-15 * 6 * 0.92, rel=1e-12)
+    assert envelope["speed_effort_gradient"] == pytest.approx(0.17 / 1e-30 / 36, rel=1e-12)
+
+
+def test_derive_limit_below_float32_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """k_t = 1e-100 N*m/A gives maxEffort 1.3e-98 N*m, 0 in PhysX's float32: refused, naming the inputs."""
+    path = write(tmp_path, "ak.yaml", AK80.format(ratio=6))
+    assert main(["derive", str(path), "--set", "motor.torque_constant=1e-100"]) == 2
+    err = capsys.readouterr().err
+    assert "controller_current" in err and "underflows to 1.32e-98" in err and err.strip().count("\n") == 0
 
 
 def test_derive_gradient_overflow_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """k_t = 1e-300 N*m/A makes R / k_t^2 overflow: a one-line error naming the inputs, exit 2."""
+    """R = 1e308 ohm makes R / k_t^2 overflow: a one-line error naming the inputs, exit 2."""
     path = write(tmp_path, "ak.yaml", AK80.format(ratio=6))
-    assert main(["derive", str(path), "--set", "motor.torque_constant=1e-300"]) == 2
+    assert main(["derive", str(path), "--set", "motor.terminal_resistance=1e308"]) == 2
     err = capsys.readouterr().err
     assert "speed_effort_gradient" in err and "motor.torque_constant" in err and err.strip().count("\n") == 0
 

@@ -98,7 +98,7 @@ _WORDS: dict[str, tuple[str, str]] = {
     "A": ("a current", "24 A"),
     "V": ("a voltage", "24 V"),
     "ohm": ("a resistance", "170 mohm"),
-    "dimensionless": ("a plain number", "0.9 or 90 %"),
+    "dimensionless": ("a plain number", "6 or 0.9"),
     "m": ("a length", "5 mm"),
     "m/turn": ("a lead (travel per revolution)", "5 mm/rev"),
     "kg*m^2": ("an inertia", "68 g*cm^2"),

@@ -13,6 +13,7 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from typing import TextIO
 
 from drive_envelope._src.cli.commands import (
     catalog,
@@ -27,7 +28,7 @@ from drive_envelope._src.cli.commands import (
     usd,
 )
 from drive_envelope._src.cli.common import PROG, Parser
-from drive_envelope._src.errors import DriveEnvelopeError
+from drive_envelope._src.errors import DriveEnvelopeError, InputError
 from drive_envelope._src.version import VERSION
 
 __all__ = ["COMMANDS", "build_parser", "main"]
@@ -51,8 +52,61 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _StandardOutput:
+    """Standard output that survives its reader leaving and says so when it cannot be written.
+
+    ``check ... | head -1`` must still exit 1 on a failed check: once the pipe is closed, the rest of
+    the output goes to the null device and the command runs to its real exit status. Any other write
+    error (a full disk behind ``> file``) is the user's environment, not a bug: one line, exit 2.
+    """
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        self._guarded(lambda: self._stream.write(text))
+        return len(text)
+
+    def flush(self) -> None:
+        self._guarded(self._stream.flush)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._stream, name)
+
+    def _guarded(self, action: object) -> None:
+        try:
+            action()  # type: ignore[operator]
+        except BrokenPipeError:
+            self._discard()
+        except OSError as exc:
+            self._discard()
+            reason = os.strerror(exc.errno) if exc.errno else str(exc)
+            raise InputError(f"cannot write to standard output: {reason}") from None
+
+    def _discard(self) -> None:
+        """Point the file descriptor at the null device: what is still buffered and written later goes."""
+        try:
+            fileno = self._stream.fileno()
+        except (OSError, ValueError):
+            return
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fileno)
+        os.close(null)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit status (0 ok, 1 a check failed or a bug, 2 bad input)."""
+    if isinstance(sys.stdout, _StandardOutput) or sys.stdout is None:
+        return _main(argv)
+    original = sys.stdout
+    sys.stdout = _StandardOutput(original)  # type: ignore[assignment]
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout = original
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -62,15 +116,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        status = int(args.func(args) or 0)
+        sys.stdout.flush()  # a write error surfaces here, not after the status is decided
+        return status
     except DriveEnvelopeError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        return 0
+    except BrokenPipeError:  # a pipe other than standard output (which _StandardOutput handles)
+        return 141  # what a shell reports for a writer ended by SIGPIPE
     except Exception as exc:  # last resort: a bug, never a user mistake (those are InputError)
         if os.environ.get("DRIVE_ENVELOPE_TRACEBACK"):
             raise

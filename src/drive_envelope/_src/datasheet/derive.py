@@ -31,6 +31,7 @@ from drive_envelope._src.datasheet.limits import (
     velocity_candidates,
 )
 from drive_envelope._src.datasheet.losses import resistance
+from drive_envelope._src.datasheet.plausibility import plausibility_warnings
 from drive_envelope._src.datasheet.result import Candidate, Derivation, Duty, LineFit
 from drive_envelope._src.datasheet.spec import Datasheet, GradientMethod
 from drive_envelope._src.envelope.model import PerformanceEnvelope
@@ -111,5 +112,6 @@ def derive(
         velocity_dependent_resistance_method=resistance_method,
         provenance=dict(sorted(ctx.provenance.items())),
         notes=tuple(ctx.notes),
+        warnings=tuple(plausibility_warnings(ctx)),
         line_fit=fit,
     )

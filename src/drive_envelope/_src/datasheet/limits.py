@@ -188,15 +188,26 @@ def velocity_candidates(ctx: DeriveContext) -> list[Candidate]:
     return candidates
 
 
+_FLOAT32_SMALLEST_NORMAL = 1.1754943508222875e-38
+
+
 def _check_finite(candidates: Sequence[Candidate], parameter: str, ctx: DeriveContext) -> None:
-    """Refuse a candidate that overflowed to inf or underflowed to 0 (every input is finite and > 0)."""
+    """Refuse a candidate that overflowed to inf or underflowed (every input is finite and > 0).
+
+    Underflow is anything below float32's smallest normal number: PhysX, USD and the GPU kernels
+    store float32, where such a limit is 0 or a subnormal that flushes to 0.
+    """
     for c in candidates:
-        if c.value is None or (math.isfinite(c.value) and c.value > 0.0):
+        if c.value is None or (math.isfinite(c.value) and c.value >= _FLOAT32_SMALLEST_NORMAL):
             continue
         inputs = ", ".join(
             f"{key} = {format_value(value, '' if unit == '1' else unit)}" for key, value, unit in c.inputs
         )
-        outcome = "overflows to inf" if not math.isfinite(c.value) else "underflows to 0"
+        outcome = (
+            "overflows to inf"
+            if not math.isfinite(c.value)
+            else f"underflows to {c.value:.3g} (below float32's smallest normal number, 1.18e-38)"
+        )
         raise InputError(
             f"{ctx.sheet.source}: {parameter} candidate {c.name} ({c.formula}) {outcome} with {inputs}: "
             "a value is out of range (check its unit)"

@@ -170,7 +170,7 @@ def datasheet_from_mapping(
     notes: list[str] = []
     context = _Reading(units=units, joint_units=joint_units, joint=joint, source=source, notes=notes)
     sections = {
-        section: _read_section(merged[section], section, context)
+        section: _read_motor_side(merged[section], section, context)
         for section in DATASHEET_SECTIONS
         if section in merged
     }
@@ -211,6 +211,27 @@ class _Reading:
     """Collects how ambiguous spellings were read."""
 
 
+def _read_motor_side(table: Any, section: str, context: _Reading) -> dict[str, Any]:
+    """``_read_section``; a rotary value on a linear motor (prismatic, no ``[screw]``) says why."""
+    try:
+        return _read_section(table, section, context)
+    except InputError as exc:
+        if context.units is not _LINEAR or context.joint_units is not _LINEAR:
+            raise
+        rotary = _Reading(
+            units=_ROTARY, joint_units=_LINEAR, joint=context.joint, source=context.source, notes=[]
+        )
+        try:
+            _read_section(table, section, rotary)
+        except InputError:
+            raise exc from None
+        raise InputError(
+            f'{exc}; joint = "prismatic" without [screw] reads [{section}] as a linear motor\'s '
+            "(forces in N, speeds in m/s): a rotary motor on a prismatic joint needs [screw] "
+            "lead = '5 mm/rev' (with its efficiency)"
+        ) from None
+
+
 def _apply_overrides(
     data: Mapping[str, Any], overrides: Mapping[str, object], source: str
 ) -> tuple[dict[str, Any], dict[str, ParamSource]]:
@@ -230,7 +251,10 @@ def _apply_overrides(
         aliases = KEY_ALIASES.get(section, {})
         if key not in SECTION_KEYS[section] and key not in aliases:
             hint = nearest_key(key, [*SECTION_KEYS[section], *aliases])
-            raise InputError(f"override {dotted!r}: unknown key {key!r} in [{section}]{hint}")
+            raise InputError(
+                f"override {dotted!r}: unknown key {key!r} in [{section}]{hint}; "
+                f"valid keys in [{section}]: {', '.join(SECTION_KEYS[section])}"
+            )
         table = merged.setdefault(section, {})
         if not isinstance(table, dict):
             raise InputError(f"{source}: key {section!r}: expected a table [{section}], got {table!r}")

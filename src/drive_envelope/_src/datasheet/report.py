@@ -65,6 +65,9 @@ def derivation_report(derivation: Derivation) -> str:
     if derivation.notes:
         lines += ["", "notes:"]
         lines += [f"  - {note}" for note in derivation.notes]
+    if derivation.warnings:
+        lines += ["", "warnings (the numbers above use these inputs as given):"]
+        lines += [f"  - {warning}" for warning in derivation.warnings]
     return "\n".join(lines)
 
 

@@ -73,6 +73,9 @@ class Derivation:
     """Where each envelope parameter and each input came from (``section.key`` or parameter name)."""
     notes: tuple[str, ...] = ()
     """Defaults used and values derived, in plain words."""
+    warnings: tuple[str, ...] = ()
+    """Inputs that look like a unit slip (constants that disagree, an efficiency of 0.9 %): the
+    envelope is computed from them as given, but they deserve a second look."""
     line_fit: LineFit | None = None
     """Optional line approximation of a mechanical-limited speed curve (not used in the envelope)."""
 
@@ -92,6 +95,7 @@ class Derivation:
             "max_actuator_velocity_limits": {c.name: c.value for c in self.max_actuator_velocity_limits},
             "speed_effort_gradient_method": self.speed_effort_gradient_method,
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
             "duty": self.duty,
             "speed_effort_gradient_reason": self.speed_effort_gradient_reason,
             "velocity_dependent_resistance_method": self.velocity_dependent_resistance_method,

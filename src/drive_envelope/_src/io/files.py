@@ -48,6 +48,9 @@ class _DuplicateKey(Exception):
         self.line = line
 
 
+_MAPPING_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
+
+
 def read_text(path: str | os.PathLike[str]) -> str:
     """Read a UTF-8 text file; a missing or unreadable file is a one-line :class:`InputError`."""
     file = Path(path)
@@ -63,12 +66,18 @@ def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a TOML (``.toml``), JSON (``.json``) or YAML (``.yaml``/``.yml``) file into a dict.
 
     Raises:
-        InputError: the file is missing, unreadable or malformed, a key is written twice, a number
-            is beyond the float range, or the top level is not a table.
+        InputError: the suffix is none of those (a ``.txt`` is not read as TOML by guess), the file
+            is missing, unreadable or malformed, a key is written twice, a number is beyond the float
+            range, or the top level is not a table.
     """
     file = Path(path)
-    text = read_text(file)
     suffix = file.suffix.lower()
+    if suffix not in _MAPPING_SUFFIXES:
+        raise InputError(
+            f"{file}: expected a .toml, .json, .yaml or .yml file (the suffix tells how to read it), "
+            f"got {repr(suffix) if suffix else 'a name without one'}"
+        )
+    text = read_text(file)
     try:
         if suffix == ".json":
             data = json.loads(text, parse_float=_parse_float, object_pairs_hook=_json_object)

@@ -129,12 +129,33 @@ def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
         path = Sdf.Path(joint_path).MakeAbsolutePath(base)
     prim = stage.GetPrimAtPath(path)
     if not prim.IsValid():
-        raise InputError(f"joint path {str(path)!r}: no such prim in {_stage_name(stage)}")
+        raise InputError(
+            f"joint path {str(path)!r}: no such prim in {_stage_name(stage)}{_nearest_joints(stage, path)}"
+        )
     if not prim.IsA(UsdPhysics.Joint):
         raise InputError(
             f"joint path {str(path)!r}: prim of type {prim.GetTypeName()!r} is not a UsdPhysics joint"
         )
     return prim
+
+
+def _nearest_joints(stage: Usd.Stage, path: Any) -> str:
+    """``" (did you mean '/A/B/joint'?)"``: joints whose path or name is closest to ``path``."""
+    import difflib
+
+    from pxr import Usd, UsdPhysics
+
+    joints = [
+        str(prim.GetPath())
+        for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies())
+        if prim.IsA(UsdPhysics.Joint)
+    ]
+    wanted = str(path)
+    same_name = [joint for joint in joints if joint.rsplit("/", 1)[-1] == wanted.rsplit("/", 1)[-1]]
+    close = same_name[:3] or difflib.get_close_matches(wanted, joints, n=3, cutoff=0.6)
+    if not close:
+        return f"; it has {len(joints)} joint(s)" + (f", e.g. {joints[0]!r}" if joints else "")
+    return " (did you mean " + " or ".join(repr(joint) for joint in close) + "?)"
 
 
 def _stage_name(stage: Usd.Stage) -> str:

@@ -60,7 +60,7 @@ def _run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.cli.common import checked_output, status, warn
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import load_datasheet
@@ -68,6 +68,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.io.atomic import atomic_write_text
 
     output = checked_output(args.output)
+    file_format = _format_from_suffix(output) if output is not None else None
     overrides = _overrides(args.set)
     if Path(args.spec).is_file():
         sheet = load_datasheet(args.spec, overrides=overrides)
@@ -83,8 +84,7 @@ def _run(args: argparse.Namespace) -> int:
     derivation = derive(
         sheet, duty=args.duty, gradient_method=args.gradient_method, approximate_line=args.approximate_line
     )
-    if output is not None:
-        file_format = _format_from_suffix(output)
+    if output is not None and file_format is not None:
         atomic_write_text(output, envelope_text(derivation.envelope, file_format))
     if args.format == "json":
         print(json.dumps(derivation.to_dict(), indent=2))
@@ -92,6 +92,9 @@ def _run(args: argparse.Namespace) -> int:
         print(derivation_report(derivation))
     else:
         print(envelope_text(derivation.envelope, args.format), end="")
+    if args.format != "text":  # the text report lists them itself
+        for warning in derivation.warnings:
+            warn(warning)
     if output is not None:
         status(f"wrote {output} ({file_format})")
     return 0
@@ -139,6 +142,19 @@ def _toml(text: str, source: str) -> dict[str, Any]:
         raise InputError(f"{source}: malformed TOML: {exc}") from None
 
 
+_OUTPUT_FORMATS = {".toml": "toml", ".json": "envelope-json", ".usda": "usd-snippet", ".usd": "usd-snippet"}
+
+
 def _format_from_suffix(output: str) -> str:
-    suffix = output.lower().rsplit(".", 1)[-1] if "." in output else ""
-    return {"json": "envelope-json", "usda": "usd-snippet", "usd": "usd-snippet"}.get(suffix, "toml")
+    """The envelope format the name of ``-o`` asks for; any other suffix is refused before any work."""
+    from pathlib import Path
+
+    from drive_envelope._src.errors import InputError
+
+    suffix = Path(output).suffix.lower()
+    if suffix not in _OUTPUT_FORMATS:
+        raise InputError(
+            f"--output {output!r}: expected a file name ending in .toml, .json, .usda or .usd "
+            "(the envelope format is taken from the suffix)"
+        )
+    return _OUTPUT_FORMATS[suffix]

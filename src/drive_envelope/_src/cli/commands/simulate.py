@@ -79,9 +79,10 @@ def _run(args: argparse.Namespace) -> int:
     chosen = _output_format(args.format, output)  # before the run: a bad output wastes no simulation
     scenario = load_scenario(args.file, args.overrides)
     try:
-        check_steps(scenario, args.max_steps)
+        steps = check_steps(scenario, args.max_steps)
     except InputError as exc:
         raise InputError(f"{args.file}: {exc}") from None
+    _say_rounded_duration(scenario.simulation.duration, scenario.simulation.dt, steps)
     engine_module(args.engine)  # a missing extra is reported as such, not as a problem of the file
     progress = Progress(f"simulate {args.engine}")
     try:
@@ -97,6 +98,17 @@ def _run(args: argparse.Namespace) -> int:
     save_trajectory(trajectory, output, format=chosen, force=args.force)
     status(_summary(trajectory, output))
     return 0
+
+
+def _say_rounded_duration(duration: float, dt: float, steps: int) -> None:
+    """Say on stderr when the run ends elsewhere than ``duration`` (not a whole number of steps)."""
+    from drive_envelope._src.cli.common import status
+
+    if abs(steps * dt - duration) > 0.01 * dt:  # a dt written to a few digits (0.0083333) is no news
+        status(
+            f"simulation.duration = {duration:g} s is not a whole number of steps of dt = {dt:g} s: "
+            f"simulating round(duration / dt) = {steps} steps, to {steps * dt:g} s"
+        )
 
 
 def _output_format(format: str | None, output: str | None) -> Any:
