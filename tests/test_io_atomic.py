@@ -84,7 +84,10 @@ def test_signal_mid_write_leaves_no_temporary_file(tmp_path: Path, signum: int) 
     target = tmp_path / "big.usda"
     ready = tmp_path / "ready"
     code = (
-        "import sys, time, pathlib\n"
+        "import sys, time, pathlib, signal\n"
+        # a shell without job control starts background jobs with SIGINT ignored, and Python then
+        # rightly keeps ignoring it: give the writer the interactive default, where Ctrl-C reaches it
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from drive_envelope._src.io.atomic import atomic_path\n"
         f"with atomic_path({str(target)!r}) as tmp:\n"
         "    tmp.write_text('x' * 1000)\n"
