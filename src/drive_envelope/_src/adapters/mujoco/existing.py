@@ -82,7 +82,7 @@ def gain_kind(
     if fixed and biastype == int(mujoco.mjtBias.mjBIAS_NONE):
         return "motor", None, None
     if fixed and biastype == int(mujoco.mjtBias.mjBIAS_AFFINE) and biasprm[0] == 0:
-        kp, kv = gainprm[0], -biasprm[2]
+        kp, kv = gainprm[0], 0.0 - biasprm[2]  # not -0.0
         if kp > 0 and biasprm[1] == -kp and kv >= 0:
             return "position", kp, kv  # position, general affine PD: kp*(u - q) - kv*qdot
         if kp > 0 and biasprm[1] == 0 and kv == kp:

@@ -8,9 +8,9 @@ from the replaced actuator unless given: ``position`` and ``general`` PD actuato
 (their control stays a target position), ``velocity`` actuators kv (a target velocity); a
 ``motor`` has none, so its joint needs ``stiffness`` and ``damping``.
 
-MuJoCo's MJCF writer keeps 6 significant digits and drops comments and ``<include>`` structure;
-the drives' ``dynprm`` are rewritten here with every digit, and asset folders are re-pointed
-relative to the output file. The file is compiled from its final folder before it replaces
+MuJoCo's MJCF writer keeps 6 significant digits unless told otherwise and drops comments and
+``<include>`` structure; here it writes every digit (:func:`write_mjcf`), and asset folders are
+re-pointed relative to the output file. The file is compiled from its final folder before it replaces
 anything.
 """
 
@@ -39,7 +39,6 @@ __all__ = [
     "driven_joints",
     "load_spec",
     "mujoco_warnings",
-    "other_actuators",
     "read_model",
     "uses_plugin",
     "write_mjcf",
@@ -161,33 +160,6 @@ def uses_plugin(model: mujoco.MjModel) -> bool:
     return any(int(p) == slot for p in model.plugin)
 
 
-def other_actuators(model: mujoco.MjModel, drives: Sequence[Any]) -> list[tuple[str, str, str]]:
-    """(joint, actuator, kind) of the actuators with a joint transmission that are not drives."""
-    import mujoco
-
-    from drive_envelope._src.adapters.mujoco.existing import gain_kind
-
-    ours = {a for d in drives for a in d.actuators}
-    joint_transmissions = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
-    found = []
-    for i in range(model.nu):
-        if i in ours or int(model.actuator_trntype[i]) not in joint_transmissions:
-            continue
-        joint = int(model.actuator_trnid[i, 0])
-        kind = "plugin" if int(model.actuator_plugin[i]) >= 0 else gain_kind(
-            int(model.actuator_gaintype[i]), int(model.actuator_biastype[i]),
-            list(model.actuator_gainprm[i]), list(model.actuator_biasprm[i]),
-        )[0]  # fmt: skip
-        found.append(
-            (
-                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, joint) or f"#{joint}",
-                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) or f"#{i}",
-                kind,
-            )
-        )
-    return found
-
-
 def driven_joints(spec: mujoco.MjSpec) -> list[str]:
     """Names of the spec's hinge and slide joints (the joints a drive can take), in model order."""
     import mujoco
@@ -250,20 +222,26 @@ def apply_drives(
         c = damping if damping is not None else (first.damping if first else None)
         if k is None or c is None:
             what = f"its actuator {first.name!r} is a {first.kind}" if first else "it has no actuator"
+            missing = [flag for flag, value in (("--stiffness", k), ("--damping", c)) if value is None]
+            flags = [f for f, v in (("--stiffness", stiffness), ("--damping", damping)) if v is not None]
+            ask = " and ".join(missing) + (f" too ({flags[0]} is given)" if flags else "")
             raise InputError(
                 f"{item.where or item.joint}: joint {item.joint!r}: {what} (no position gains to keep); "
-                "give --stiffness and --damping"
+                f"give {ask}"
             )
-        drive = add_drive(
-            spec,
-            item.joint,
-            envelope=item.envelope,
-            stiffness=k,
-            damping=c,
-            inputs=inputs,
-            effort_sensor=False,
-            replace=True,
-        )
+        try:
+            drive = add_drive(
+                spec,
+                item.joint,
+                envelope=item.envelope,
+                stiffness=k,
+                damping=c,
+                inputs=inputs,
+                effort_sensor=False,
+                replace=True,
+            )
+        except InputError as exc:
+            raise _at(item, exc) from None
         given = "given" if stiffness is not None and damping is not None else ""
         source = given or (f"{first.kind} {first.name!r}" if first else "given")
         done.append(
@@ -279,6 +257,16 @@ def apply_drives(
             )
         )
     return done
+
+
+def _at(item: Assignment, exc: InputError) -> InputError:
+    """``exc`` with the map key (or flag) of ``item`` in front, instead of the ``add_drive(...)`` call."""
+    from drive_envelope._src.adapters.usd.joint_map import keyed_error
+
+    message = str(exc).removeprefix(f"add_drive(joint={item.joint!r}): ")
+    if message != str(exc):
+        message = f"joint {item.joint!r}: {message}"
+    return keyed_error(item.where, InputError(message))
 
 
 def _exact_dynprm(xml: str, spec: mujoco.MjSpec) -> str:
@@ -341,8 +329,12 @@ def write_mjcf(
 ) -> mujoco.MjModel:
     """Write ``spec`` as MJCF to ``output`` atomically, after compiling it from there.
 
-    Unlike ``spec.to_xml()`` alone, the drives' ``dynprm`` keep every digit (MuJoCo's writer keeps
-    6), and the file is known to load before it replaces anything.
+    Unlike ``spec.to_xml()`` alone (6 significant digits), every number keeps every digit: MuJoCo's
+    writer is switched to 17 digits meanwhile and each number is written as its shortest exact text
+    (:mod:`~drive_envelope._src.adapters.mujoco.precision`); the drives' ``dynprm`` are rewritten
+    exactly in any case. The written file is compiled and compared with the model compiled in
+    memory: a relative difference above 1e-9 in any number (a MuJoCo without the precision entry
+    point) is a warning naming the worst one. The file is known to load before it replaces anything.
 
     Args:
         spec: The robot (with its drives).
@@ -359,16 +351,24 @@ def write_mjcf(
     """
     import mujoco
 
+    from drive_envelope._src.adapters.mujoco.precision import (
+        LOSS_TOLERANCE,
+        full_precision,
+        precision_loss,
+        shortest_numbers,
+    )
     from drive_envelope._src.io.atomic import atomic_path
 
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            xml = spec.to_xml()
+        with warnings.catch_warnings(), mujoco_warnings():
+            warnings.simplefilter("ignore")  # the compiled file gives the plugin's warnings below
+            reference = spec.compile()
+            with full_precision() as exact:
+                xml = spec.to_xml()
     except ValueError as exc:
         where = os.fspath(source if source is not None else output)
         raise InputError(f"{where}: MuJoCo cannot write the result: {' '.join(str(exc).split())}") from None
-    xml = _exact_dynprm(xml, spec)
+    xml = _exact_dynprm(shortest_numbers(xml) if exact else xml, spec)
     if source is not None:
         xml = _repoint_assets(xml, spec, Path(source), Path(output))
     with atomic_path(output, force=force) as tmp:
@@ -381,4 +381,11 @@ def write_mjcf(
                 f"{os.fspath(output)}: the result does not load in MuJoCo, nothing written: "
                 f"{' '.join(str(exc).split())}"
             ) from None
+    loss, where = precision_loss(reference, model)
+    if loss > LOSS_TOLERANCE:
+        warnings.warn(
+            f"{os.fspath(output)}: MuJoCo's MJCF writer kept fewer digits than the model had: its "
+            f"numbers differ by up to {loss:.2g} relative (e.g. {where}); the drives' numbers are exact",
+            stacklevel=2,
+        )
     return model

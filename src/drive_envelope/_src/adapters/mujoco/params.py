@@ -21,10 +21,12 @@ how to randomize the envelope (``examples/mujoco/domain_randomization.py``).
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeAlias
 
+from drive_envelope._src.adapters.mujoco.handle import MjDrive
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
@@ -38,7 +40,10 @@ __all__ = [
     "NO_LIMIT",
     "PARAM_BOUND",
     "MjDriveInfo",
+    "DriveRef",
     "drive_dynprm",
+    "drive_label",
+    "find_drive",
     "get_envelope",
     "get_gains",
     "model_drives",
@@ -211,34 +216,114 @@ def _info(
     )
 
 
-def _find(model: mujoco.MjModel, actuator: int | str, where: str) -> MjDriveInfo:
-    """The drive that actuator ``actuator`` (name or id, any of the drive's actuators) belongs to."""
+DriveRef: TypeAlias = "str | int | MjDrive | MjDriveInfo"
+"""What names a drive: an actuator name, an actuator index, a joint name, an MjDrive, an MjDriveInfo."""
+_EXPECTED = "an actuator name or index, a joint name, an MjDrive or an MjDriveInfo"
+
+
+def drive_label(drive: object) -> str:
+    """How a drive argument reads in a message: ``'el'``, ``3``, ``MjDrive 'el'``."""
+    if isinstance(drive, (MjDrive, MjDriveInfo)):
+        return f"{type(drive).__name__} {drive.name!r}"
+    return repr(drive) if isinstance(drive, (str, numbers.Integral)) else type(drive).__name__
+
+
+def find_drive(model: mujoco.MjModel, drive: object, where: str, argument: str = "actuator") -> MjDriveInfo:
+    """The drive of ``model`` that ``drive`` names, with its current numbers.
+
+    Lookup: an :class:`MjDriveInfo` by its effort actuator's index, an :class:`MjDrive` by its
+    effort actuator's name, an integer as an actuator index and a string first as the name of any
+    of a drive's actuators, then as the name of a driven joint (one drive per joint).
+
+    Raises:
+        InputError: nothing of that name or index, an actuator or joint without a drive, a handle
+            from another model, or an argument of another type; naming ``argument``.
+    """
     import mujoco
 
-    if isinstance(actuator, str):
-        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
-        if index < 0:
-            raise InputError(f"{where}: argument 'actuator': the model has no actuator named {actuator!r}")
-    elif isinstance(actuator, int) and not isinstance(actuator, bool) and 0 <= actuator < model.nu:
-        index = actuator
-    else:
-        raise InputError(
-            f"{where}: argument 'actuator': expected an actuator name or an id in [0, {model.nu}), "
-            f"got {actuator!r}"
+    drives = model_drives(model)
+    owner = {a: info for info in drives for a in info.actuators}
+    prefix = f"{where}: argument {argument!r}"
+    if isinstance(drive, (MjDrive, MjDriveInfo)):
+        index = (
+            drive.actuator
+            if isinstance(drive, MjDriveInfo)
+            else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, drive.name)
         )
-    for info in model_drives(model):
-        if index in info.actuators:
-            return info
+        found = owner.get(index)
+        if found is None or found.name != drive.name or found.joint != drive.joint:
+            raise InputError(
+                f"{prefix}: {drive_label(drive)} (joint {drive.joint!r}) is not a drive of this model; "
+                f"its drives: {_listed([d.name for d in drives])}"
+            )
+        return found
+    if isinstance(drive, numbers.Integral) and not isinstance(drive, bool):
+        if not 0 <= int(drive) < model.nu:
+            raise InputError(
+                f"{prefix}: expected an actuator name, or an id in [0, {model.nu}), got {int(drive)}"
+            )
+        return _owner(model, owner, int(drive), prefix)
+    if not isinstance(drive, str):
+        raise InputError(f"{prefix}: expected {_EXPECTED}, got {type(drive).__name__}")
+    index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, drive)
+    if index >= 0 and index in owner:
+        return owner[index]
+    by_joint = {info.joint: info for info in drives}
+    if drive in by_joint:
+        return by_joint[drive]
+    if index >= 0:
+        return _owner(model, owner, index, prefix)
+    if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, drive) >= 0:
+        raise InputError(f"{prefix}: joint {drive!r} has no envelope drive; {_drives_hint(drives)}")
+    import difflib
+
+    actuators = [name for info in drives for name in _names(model, info.actuators)]
+    close = difflib.get_close_matches(drive, list(dict.fromkeys(actuators + list(by_joint))), n=3)
+    hint = f" (did you mean {_listed(close)}?)" if close else f"; {_drives_hint(drives)}"
+    raise InputError(
+        f"{prefix}: the model has no actuator named {drive!r} and no driven joint of that name{hint}"
+    )
+
+
+def _owner(model: mujoco.MjModel, owner: dict[int, MjDriveInfo], index: int, prefix: str) -> MjDriveInfo:
+    import mujoco
+
+    if index in owner:
+        return owner[index]
     name = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, index)
-    raise InputError(f"{where}: actuator {name!r} is not a drive of the drive_envelope.envelope plugin")
+    raise InputError(
+        f"{prefix}: actuator {name!r} is not a drive of the drive_envelope.envelope plugin; "
+        f"{_drives_hint(list(dict.fromkeys(owner.values())))}"
+    )
 
 
-def set_envelope(model: mujoco.MjModel, actuator: int | str, envelope: PerformanceEnvelope | str) -> None:
+def _names(model: mujoco.MjModel, actuators: Sequence[int]) -> list[str]:
+    import mujoco
+
+    return [_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in actuators]
+
+
+def _listed(names: Sequence[str]) -> str:
+    shown = ", ".join(repr(n) for n in names[:6])
+    return (shown + f" and {len(names) - 6} more" if len(names) > 6 else shown) or "none"
+
+
+def _drives_hint(drives: Sequence[MjDriveInfo]) -> str:
+    if not drives:
+        return "the model has no envelope drive"
+    return (
+        "its drives (actuator on joint): "
+        + ", ".join(f"{d.name!r} on {d.joint!r}" for d in drives[:6])
+        + (f" and {len(drives) - 6} more" if len(drives) > 6 else "")
+    )
+
+
+def set_envelope(model: mujoco.MjModel, actuator: DriveRef, envelope: PerformanceEnvelope | str) -> None:
     """Give a drive a new envelope; it takes effect at the next ``mj_step`` of every ``MjData``.
 
     Args:
         model: The compiled model (its ``actuator_dynprm`` is written).
-        actuator: Name or id of any of the drive's actuators.
+        actuator: The drive: see :func:`find_drive`.
         envelope: A :class:`PerformanceEnvelope`, or an envelope file, datasheet file or catalog name.
 
     Raises:
@@ -246,8 +331,8 @@ def set_envelope(model: mujoco.MjModel, actuator: int | str, envelope: Performan
     """
     from drive_envelope._src.datasheet.resolve import resolve_envelope
 
-    where = f"set_envelope(actuator={actuator!r})"
-    info = _find(model, actuator, where)
+    where = f"set_envelope(actuator={drive_label(actuator)})"
+    info = find_drive(model, actuator, "set_envelope")
     env = resolve_envelope(envelope, where=f"{where}: argument 'envelope'")
     kind = _joint_kind(model, info)
     if env.joint != kind:
@@ -258,7 +343,7 @@ def set_envelope(model: mujoco.MjModel, actuator: int | str, envelope: Performan
 
 def set_gains(
     model: mujoco.MjModel,
-    actuator: int | str,
+    actuator: DriveRef,
     *,
     stiffness: float | None = None,
     damping: float | None = None,
@@ -267,15 +352,15 @@ def set_gains(
 
     Args:
         model: The compiled model.
-        actuator: Name or id of any of the drive's actuators.
+        actuator: The drive: see :func:`find_drive`.
         stiffness: Drive stiffness, SI [N*m/rad or N/m] (force) or [1/s^2] (acceleration).
         damping: Drive damping, SI [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration).
 
     Raises:
         InputError: no such drive, or a gain outside ``[0, 1e12]``.
     """
-    where = f"set_gains(actuator={actuator!r})"
-    info = _find(model, actuator, where)
+    where = f"set_gains(actuator={drive_label(actuator)})"
+    info = find_drive(model, actuator, "set_gains")
     units = ("N*m/rad", "N*m*s/rad") if _joint_kind(model, info) == "revolute" else ("N/m", "N*s/m")
     if stiffness is not None:
         model.actuator_dynprm[info.actuator, 4] = _checked(
@@ -287,22 +372,22 @@ def set_gains(
         )
 
 
-def get_envelope(model: mujoco.MjModel, actuator: int | str) -> PerformanceEnvelope:
+def get_envelope(model: mujoco.MjModel, actuator: DriveRef) -> PerformanceEnvelope:
     """The envelope a drive has in ``model`` now (SI).
 
     Raises:
         InputError: no such drive, or its numbers are not an envelope (unlimited or invalid).
     """
-    where = f"get_envelope(actuator={actuator!r})"
-    info = _find(model, actuator, where)
+    where = f"get_envelope(actuator={drive_label(actuator)})"
+    info = find_drive(model, actuator, "get_envelope")
     if info.envelope is None:
         raise InputError(f"{where}: drive {info.name!r} has no valid envelope: dynprm = {list(info.dynprm)}")
     return info.envelope
 
 
-def get_gains(model: mujoco.MjModel, actuator: int | str) -> tuple[float, float]:
+def get_gains(model: mujoco.MjModel, actuator: DriveRef) -> tuple[float, float]:
     """``(stiffness, damping)`` of a drive in ``model`` now (SI, see :func:`set_gains`)."""
-    info = _find(model, actuator, f"get_gains(actuator={actuator!r})")
+    info = find_drive(model, actuator, "get_gains")
     return info.stiffness, info.damping
 
 

@@ -1,4 +1,10 @@
-"""Reading a drive's operating points back: after ``mj_step``, and from ``mujoco.rollout`` outputs."""
+"""Reading a drive's operating points back: after ``mj_step``, and from ``mujoco.rollout`` outputs.
+
+Both take the drive as the model-side functions do
+(:func:`~drive_envelope._src.adapters.mujoco.params.find_drive`): an :class:`MjDrive` from
+``add_drive``, an :class:`MjDriveInfo` from ``model_drives``, an actuator name or index, or the
+name of the driven joint.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +13,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.adapters.mujoco.spec import MjDrive
+from drive_envelope._src.adapters.mujoco.handle import MjDrive
+from drive_envelope._src.adapters.mujoco.params import DriveRef, MjDriveInfo, drive_label, find_drive
 from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
@@ -18,38 +25,59 @@ __all__ = ["drive_state", "rollout_operating_points"]
 FloatArray = npt.NDArray[np.float64]
 
 
-def _ids(model: mujoco.MjModel, drive: MjDrive) -> tuple[int, int]:
-    """(dof address, force address of the first actuator) of ``drive`` in ``model``."""
-    import mujoco
-
-    joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, drive.joint)
-    actuator = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, drive.actuators[0])
-    if joint < 0 or actuator < 0:
-        raise InputError(
-            f"drive {drive.name!r}: the model has no joint {drive.joint!r} or actuator {drive.actuators[0]!r}"
-        )
-    return int(model.jnt_dofadr[joint]), int(model.actuator_outadr[actuator])
+def _ids(model: mujoco.MjModel, info: MjDriveInfo) -> tuple[int, int]:
+    """(dof address, force address of the effort actuator) of a drive of ``model``."""
+    joint = int(model.actuator_trnid[info.actuator, 0])
+    return int(model.jnt_dofadr[joint]), int(model.actuator_outadr[info.actuator])
 
 
-def drive_state(model: mujoco.MjModel, data: mujoco.MjData, drive: MjDrive) -> tuple[float, float]:
+def drive_state(model: mujoco.MjModel, data: mujoco.MjData, drive: DriveRef) -> tuple[float, float]:
     """The drive's operating point after ``mj_step``: (end-of-step velocity, step effort).
+
+    Args:
+        model: The compiled model.
+        data: Its data, after ``mj_step``.
+        drive: An :class:`MjDrive`, an :class:`MjDriveInfo`, an actuator name or index, or the
+            driven joint's name.
 
     Returns:
         ``(velocity [rad/s or m/s], total actuator effort [N*m or N])``, the point the envelope
         bounds (PhysX evaluates it at the end-of-step velocity).
+
+    Raises:
+        InputError: ``drive`` names no drive of ``model``, or is of another type.
     """
-    dof, out = _ids(model, drive)
+    dof, out = _ids(model, find_drive(model, drive, "drive_state", argument="drive"))
     return float(data.qvel[dof]), float(data.actuator_force[out])
 
 
+def _effort_sensor(model: mujoco.MjModel, drive: object, info: MjDriveInfo) -> int:
+    """Id of an ``actuatorfrc`` sensor on the drive's effort actuator."""
+    import mujoco
+
+    if isinstance(drive, MjDrive) and drive.effort_sensor:
+        sensor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, drive.effort_sensor)
+        if sensor >= 0:
+            return int(sensor)
+    kind = int(mujoco.mjtSensor.mjSENS_ACTUATORFRC)
+    for sensor in range(model.nsensor):
+        if int(model.sensor_type[sensor]) == kind and int(model.sensor_objid[sensor]) == info.actuator:
+            return sensor
+    raise InputError(
+        f"rollout_operating_points(drive={drive_label(drive)}): drive {info.name!r} has no actuatorfrc "
+        "sensor; rollouts need one (add_drive(..., effort_sensor=True) adds it)"
+    )
+
+
 def rollout_operating_points(
-    model: mujoco.MjModel, drive: MjDrive, state: npt.ArrayLike, sensordata: npt.ArrayLike
+    model: mujoco.MjModel, drive: DriveRef, state: npt.ArrayLike, sensordata: npt.ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
     """Operating points of ``drive`` from the outputs of ``mujoco.rollout.rollout``.
 
     Args:
         model: The compiled model.
-        drive: The drive (added with ``effort_sensor=True``).
+        drive: The drive, as for :func:`drive_state`; its effort actuator needs an ``actuatorfrc``
+            sensor (``add_drive(..., effort_sensor=True)``, the default).
         state: Rollout states, ``(..., nstep, nstate)`` of ``mjSTATE_FULLPHYSICS``.
         sensordata: Rollout sensor data, ``(..., nstep, nsensordata)``.
 
@@ -57,12 +85,9 @@ def rollout_operating_points(
         ``(velocity, effort)`` arrays of shape ``(..., nstep)``: the velocity after each step
         [rad/s or m/s] and that step's total actuator effort [N*m or N].
     """
-    import mujoco
-
-    if not drive.effort_sensor:
-        raise InputError(f"drive {drive.name!r}: added without effort_sensor; rollouts need it")
-    sensor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, drive.effort_sensor)
-    dof, _ = _ids(model, drive)
+    info = find_drive(model, drive, "rollout_operating_points", argument="drive")
+    sensor = _effort_sensor(model, drive, info)
+    dof, _ = _ids(model, info)
     states = np.asarray(state, dtype=np.float64)
     sensors = np.asarray(sensordata, dtype=np.float64)
     # mjSTATE_FULLPHYSICS starts with time, qpos, qvel

@@ -18,7 +18,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.adapters.usd.joint_map import JointMap, match_joints, resolve_envelopes
+from drive_envelope._src.adapters.usd.joint_map import (
+    JointMap,
+    keyed_error,
+    match_joints,
+    resolve_envelopes,
+)
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -126,7 +131,7 @@ def apply_envelopes(stage: Usd.Stage, assignments: Sequence[Assignment]) -> list
                 warnings.simplefilter("always")
                 inst = author_envelope(prim, item.envelope, item.instance, articulated=articulated)
         except InputError as exc:
-            raise InputError(f"{item.where}: {exc}" if item.where else str(exc)) from None
+            raise keyed_error(item.where, exc) from None
         results.append(
             AppliedDrive(
                 joint_path=item.joint_path,

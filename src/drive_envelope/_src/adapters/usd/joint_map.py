@@ -46,7 +46,16 @@ from typing import Any
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["JointMap", "MapEntry", "MapMatch", "MappedJoint", "match_joints", "read_map", "resolve_envelopes"]
+__all__ = [
+    "JointMap",
+    "MapEntry",
+    "MapMatch",
+    "MappedJoint",
+    "keyed_error",
+    "match_joints",
+    "read_map",
+    "resolve_envelopes",
+]
 
 _FILE_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 _SHOWN = 3  # joint names quoted in one message
@@ -291,3 +300,12 @@ def resolve_envelopes(match: MapMatch) -> list[MappedJoint]:
             )
         resolved.append(MappedJoint(joint=item.joint, entry=item.entry, envelope=cache[source]))
     return resolved
+
+
+def keyed_error(where: str, exc: InputError) -> InputError:
+    """``exc`` with the entry's ``where`` (``"map.toml: key 'joints.<pattern>'"``) in front.
+
+    Engines call this on the error of applying a mapped joint, so that the message names the map
+    file and key the joint came from; an empty ``where`` (no map) leaves the message as it is.
+    """
+    return InputError(f"{where}: {exc}" if where else str(exc))

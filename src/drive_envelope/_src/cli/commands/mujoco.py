@@ -122,6 +122,7 @@ def _assignments(args: argparse.Namespace, spec: Any) -> list[Any]:
 def _apply(args: argparse.Namespace) -> int:
     import warnings
 
+    from drive_envelope._src.adapters.mujoco.bypass import bypass_warnings, is_bypass_warning, other_actuators
     from drive_envelope._src.adapters.mujoco.loader import load_plugin
     from drive_envelope._src.adapters.mujoco.mjcf import apply_drives, load_spec, write_mjcf
     from drive_envelope._src.adapters.mujoco.params import model_drives
@@ -135,7 +136,12 @@ def _apply(args: argparse.Namespace) -> int:
         warnings.simplefilter("always")
         done = apply_drives(spec, assignments, stiffness=args.stiffness, damping=args.damping)
         model = write_mjcf(spec, args.output, source=args.model, force=args.force)
+    drives = model_drives(model)
+    # the plugin warns once per process and per joint; say it once per actuator, from the result
     for message in dict.fromkeys(str(w.message) for w in caught):
+        if not is_bypass_warning(message):
+            warn(message)
+    for message in bypass_warnings(other_actuators(model, drives)):
         warn(message)
     for item in done:
         replaced = f"replaces {item.replaced}" if item.replaced else "new actuator"
@@ -143,7 +149,7 @@ def _apply(args: argparse.Namespace) -> int:
             f"{item.joint}: drive {item.drive!r} ({replaced}; inputs {' '.join(item.inputs)}; gains "
             f"{item.gains_from}): {_summary(item.envelope, item.stiffness, item.damping)}"
         )
-    status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(model_drives(model))} drives)")
+    status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(drives)} drives)")
     return 0
 
 
@@ -170,7 +176,8 @@ def _show(args: argparse.Namespace) -> int:
     import math
     import warnings
 
-    from drive_envelope._src.adapters.mujoco.mjcf import other_actuators, read_model, uses_plugin
+    from drive_envelope._src.adapters.mujoco.bypass import other_actuators
+    from drive_envelope._src.adapters.mujoco.mjcf import read_model, uses_plugin
     from drive_envelope._src.adapters.mujoco.params import model_drives
     from drive_envelope._src.cli.common import warn
     from drive_envelope._src.format import format_table, format_value
@@ -206,7 +213,16 @@ def _show(args: argparse.Namespace) -> int:
                 }
                 for d in drives
             ],
-            "other_actuators": [{"joint": j, "actuator": a, "kind": k} for j, a, k in others],
+            "other_actuators": [
+                {
+                    "joint": o.joint,
+                    "actuator": o.actuator,
+                    "kind": o.kind,
+                    "transmission": o.transmission,
+                    "bypasses_drive": o.drive,
+                }
+                for o in others
+            ],
         }
         print(json.dumps(data, indent=2))
         return 0
@@ -228,5 +244,6 @@ def _show(args: argparse.Namespace) -> int:
         )
     if others:
         print("joints with other actuators (their force bypasses any envelope):")
-        print(format_table(["joint", "actuator", "kind"], [list(o) for o in others]))
+        rows = [[o.joint, o.actuator, o.kind, o.transmission, o.drive or "-"] for o in others]
+        print(format_table(["joint", "actuator", "kind", "transmission", "bypasses drive"], rows))
     return 0
