@@ -14,6 +14,7 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.check import CheckOptions, CheckReport, JointCheck, check_chunks
 from drive_envelope._src.analysis.curve import read_curve
 from drive_envelope._src.analysis.fit import FitOptions, FitResult, fit_samples
+from drive_envelope._src.analysis.fit_evidence import WARNING
 from drive_envelope._src.analysis.logs import (
     DEFAULT_CHUNK_ROWS,
     LogChunk,
@@ -67,7 +68,8 @@ def check_log(
         envelopes: One envelope for all joints, a mapping joint name (or glob) -> envelope, or a
             spec string (joint mapping file, envelope file, datasheet file, catalog name).
         log: CSV or Parquet path, or an in-memory table (mapping of arrays, DataFrame, pyarrow Table).
-        columns: Column names; defaults ``time,velocity,effort`` (and ``joint`` when present).
+        columns: Column names; defaults ``time,velocity,effort`` (and ``joint`` when present). Units
+            in the headers are read for the envelopes' joint type.
         options: Tolerance and thresholds.
         chunk_rows: Rows read at a time (the memory bound).
         engine: CSV reader: ``"auto"``, ``"pyarrow"`` or ``"python"``.
@@ -80,6 +82,14 @@ def check_log(
             a joint without envelope.
     """
     resolved = resolve_envelopes(envelopes)
+    columns = columns or LogColumns()
+    kinds = (
+        {resolved.joint}
+        if isinstance(resolved, PerformanceEnvelope)
+        else {envelope.joint for _, envelope in resolved.entries}
+    )
+    if columns.joint_type is None and len(kinds) == 1:  # units in the header must be of that type
+        columns = replace(columns, joint_type=kinds.pop())
     chunks = iter_log(log, columns, chunk_rows=chunk_rows, engine=engine)
     return check_chunks(chunks, resolved, options=options or CheckOptions(), source=source_label(log))
 
@@ -141,13 +151,24 @@ def fit_log(
         select: Joint name to fit in a long-format log with several joints.
         engine: CSV reader.
 
+    Units in the column headers (``velocity [rpm]``) are converted to SI for ``options.joint``;
+    the time column is not read.
+
     Raises:
-        InputError: unreadable log, several joints without ``select``, too few samples.
+        InputError: unreadable log, a unit of the other joint type, several joints without
+            ``select``, too few samples.
     """
-    chunk = read_log(log, columns, engine=engine)
-    label = source_label(log)
-    velocity, effort = _select_joint(chunk, select, label)
     options = options or FitOptions()
+    label = source_label(log)
+    columns = columns or LogColumns()
+    if columns.joint_type not in (None, options.joint):
+        raise InputError(
+            f"{label}: the columns are read for a {columns.joint_type} joint, the fit is for a "
+            f"{options.joint} one; expected one joint type"
+        )
+    # the time is not read: a fit does not depend on the order of the samples
+    chunk = read_log(log, replace(columns, time=None, joint_type=options.joint), engine=engine)
+    velocity, effort = _select_joint(chunk, select, label)
     if select and not options.name:
         options = replace(options, name=select)
     where = f"{label}: joint {select!r}" if select else label
@@ -182,4 +203,7 @@ def fit_curve(
         curve_options = replace(curve_options, name=Path(path).stem)
     result = _fit_from(str(path), velocity, effort, curve_options)
     note = "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
-    return replace(result, notes=(*result.notes, note))
+    # a curve's points lie on the boundary by construction: a line through one point (a stall point)
+    # is how a datasheet draws it, not a spike, and the outlier allowance does not apply to curves
+    notes = [kept for kept in result.notes if not kept.startswith(WARNING)]
+    return replace(result, notes=(*notes, note))

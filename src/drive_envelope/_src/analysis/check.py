@@ -12,8 +12,8 @@ speed and the drive let go, as PhysX's does; such samples are counted as *releas
 ``|margin| <= limit_band * cap``. Margins are histogrammed as a fraction of the cap (bins of 0.1 %
 of the cap between -100 % and +100 %), so the reported quantiles are accurate to 0.1 % of the cap
 while memory stays constant; the minimum is exact. Time on a limit sums the time step that ends at
-each sample on it (the first sample of a joint counts 0; a backwards jump in time, e.g. a new
-episode, counts 0).
+each sample on it (the first sample of a joint counts 0; a jump back in time, a new episode,
+counts 0, and the report counts those jumps and names the row of the first).
 
 Memory is one chunk of the log plus about 32 KiB per joint; :attr:`CheckOptions.max_joints` bounds
 the number of joints.
@@ -191,6 +191,8 @@ class _Joint:
         self.time_outside = 0.0
         self.time_released = 0.0
         self.last_time: float | None = None
+        self.time_resets = 0
+        self.first_time_reset: int | None = None
         self.has_time = False
         self.kept = _Keeper(options.keep_points) if options.keep_points else None
 
@@ -213,6 +215,7 @@ class _Joint:
             previous = time[0] if self.last_time is None else self.last_time
             with np.errstate(over="ignore"):  # steps beyond float range: an infinite duration
                 dt = np.diff(time, prepend=previous)
+                self._count_time_resets(dt, rows)
                 np.maximum(dt, 0.0, out=dt)  # a jump back in time (a new episode) counts 0
                 self.duration += float(dt.sum())
             self.last_time = float(time[-1])
@@ -249,6 +252,14 @@ class _Joint:
             self.time_released += float(np.sum(dt, where=released))
         self._keep(velocity, effort, time, rows, outside)
 
+    def _count_time_resets(self, dt: FloatArray, rows: Any) -> None:
+        """Count the samples whose time is below the one before (episodes), and the first one's row."""
+        back = np.flatnonzero(dt < 0.0)
+        if back.size:
+            self.time_resets += int(back.size)
+            if self.first_time_reset is None:
+                self.first_time_reset = int(rows[int(back[0])])
+
     def _keep(
         self, velocity: FloatArray, effort: FloatArray, time: FloatArray | None, rows: Any, outside: BoolArray
     ) -> None:
@@ -269,6 +280,8 @@ class _Joint:
             points=None if self.kept is None else self.kept.points(),
             samples_released=self.released,
             time_released=self.time_released if self.has_time else None,
+            time_resets=self.time_resets,
+            first_time_reset=self.first_time_reset,
         )
 
 
@@ -406,7 +419,17 @@ def _new_joint(
                 f"{source}: a joint mapping ({envelopes.source}) needs a joint column in the log; "
                 "name it with --joint-column"
             )
+        if chunk.joint_type is not None and chunk.joint_type != envelopes.joint:
+            raise InputError(
+                f"{source}: the units in the log's column headers are those of a {chunk.joint_type} "
+                f"joint, but the envelope is {envelopes.joint}; expected one joint type"
+            )
         return _Joint(envelopes.name or "joint", envelopes, options)
     name = chunk.names[code]
     envelope = envelopes.envelope_for(name) if isinstance(envelopes, JointMapping) else envelopes
+    if chunk.joint_type is not None and chunk.joint_type != envelope.joint:
+        raise InputError(
+            f"{source}: the units in the log's column headers are those of a {chunk.joint_type} joint, "
+            f"but joint {name!r} has a {envelope.joint} envelope; expected one joint type"
+        )
     return _Joint(name, envelope, options)

@@ -2,7 +2,8 @@
 
 The file is a small CSV with a header. A column's unit may follow its name in brackets or
 parentheses, as digitizing tools and datasheets write them (``speed [rpm]``, ``torque (mNm)``); a
-column without a unit is SI. The points must be joint side: convert motor-side curves through the
+column without a unit is SI. Headers are read by :mod:`.log_units`, as the logs of ``check`` and
+``fit`` are. The points must be joint side: convert motor-side curves through the
 gear first (speed / ratio, torque * ratio * efficiency).
 
     speed [rpm],torque [mNm]
@@ -19,17 +20,15 @@ from __future__ import annotations
 
 import csv
 import os
-import re
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_units import column_scale, split_header
 from drive_envelope._src.analysis.logs import LogColumns
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.params.table import si_unit
-from drive_envelope._src.units import to_si
 
 __all__ = ["EFFORT_ALIASES", "VELOCITY_ALIASES", "read_curve"]
 
@@ -39,14 +38,10 @@ VELOCITY_ALIASES = ("velocity", "speed", "omega", "v")
 EFFORT_ALIASES = ("effort", "torque", "force", "tau")
 """Column names accepted for the effort of a curve when the default column name is absent."""
 
-_HEADER = re.compile(r"^\s*(?P<name>[^\[\(]*?)\s*(?:[\[\(](?P<unit>[^\]\)]*)[\]\)])?\s*$")
-
 
 def _split_header(cell: str) -> tuple[str, str]:
-    match = _HEADER.match(cell)
-    if match is None:  # pragma: no cover - the pattern matches any string
-        return cell.strip(), ""
-    return match.group("name").strip().lower(), (match.group("unit") or "").strip()
+    name, unit = split_header(cell)
+    return name.lower(), unit
 
 
 def _find(
@@ -108,10 +103,9 @@ def read_curve(
     )
     e_col = _find(names, columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
     scales = []
-    for col, field in ((v_col, "max_actuator_velocity"), (e_col, "max_effort")):
+    for col, role in ((v_col, "velocity"), (e_col, "effort")):
         name, unit = header[col]
-        expected = si_unit(field, joint)
-        scales.append(to_si(f"1 {unit}", expected, f"{label}: column {name!r}") if unit else 1.0)
+        scales.append(column_scale(role, unit, joint, f"{label}: column {name!r}")[0])
     values = np.empty((len(rows) - 1, 2))
     for row_number, row in enumerate(rows[1:], start=1):
         for out, col in enumerate((v_col, e_col)):

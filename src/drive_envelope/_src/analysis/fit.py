@@ -47,7 +47,7 @@ from drive_envelope._src.analysis.fit_estimates import (
     bootstrap,
     estimates,
 )
-from drive_envelope._src.analysis.fit_evidence import FitLine, line_evidence
+from drive_envelope._src.analysis.fit_evidence import FitLine, line_evidence, support_warnings
 from drive_envelope._src.analysis.fit_frontier import Frontier
 from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
 from drive_envelope._src.analysis.fit_rounds import frontier_fit
@@ -143,7 +143,8 @@ class FitResult:
     """``|v| - (max_actuator_velocity - G|tau|)`` of the frontier samples eq. 2 bounds, positive
     outside [rad/s or m/s]; empty when eq. 2 is not identified."""
     notes: tuple[str, ...] = ()
-    """Remarks on identifiability and method."""
+    """Remarks on identifiability and method; those starting with ``"warning: "`` warn that a number
+    may rest on a fluke (a line decided by one sample)."""
 
     def estimate(self, name: str) -> ParameterEstimate:
         """The estimate of parameter ``name``."""
@@ -231,7 +232,9 @@ def fit_samples(
             f"uncertainties: {options.bootstrap} bootstrap resamples of the frontier samples "
             "(a rough scale for a frontier fit)"
         )
-    return _result(envelope, parameters, model, frontier, x, y, pair, tuple(notes))
+    result = _result(envelope, parameters, model, frontier, x, y, pair, tuple(notes))
+    warnings = support_warnings(result.lines, x, y, options.joint, set(fixed))
+    return dataclasses.replace(result, notes=(*result.notes, *warnings)) if warnings else result
 
 
 def _result(

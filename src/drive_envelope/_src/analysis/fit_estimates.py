@@ -64,8 +64,10 @@ def bootstrap(
 
 _UNIDENTIFIED = {
     "max_actuator_velocity": "the data never reach the speed limit: reported as inf",
-    "velocity_dependent_resistance": "the samples on eq. 1 span no speed range: 0 assumed",
-    "speed_effort_gradient": "the samples on eq. 2 span no effort range: 0 assumed (a vertical speed limit)",
+    "velocity_dependent_resistance": "the frontier samples on eq. 1 span no speed range: 0 assumed",
+    "speed_effort_gradient": (
+        "the frontier samples on eq. 2 span no effort range: 0 assumed (a vertical speed limit)"
+    ),
 }
 _SPEED_LINE_RESISTANCE = (
     "0: the samples' one line reaches zero effort, so it is eq. 2 (the speed-torque line)"
@@ -133,10 +135,10 @@ def estimates(
 
 
 def _max_effort_note(model: Model, x: FloatArray, joint: JointType) -> str:
-    """How max_effort was read when no sample is near standstill (below 5 % of the top speed).
+    """How max_effort was read when no frontier sample is near standstill (below 5 % of the top speed).
 
-    Eq. 1's intercept is extrapolated to zero speed; with eq. 2 only, eq. 1 was never reached and
-    max_effort is the largest effort seen.
+    ``x`` holds the frontier samples' ``|velocity|``. Eq. 1's intercept is extrapolated to zero
+    speed; with eq. 2 only, eq. 1 was never reached and max_effort is the largest frontier effort.
     """
     speeds = x if model.lines == "speed" else x[x <= model.split]
     low = float(speeds.min()) if speeds.size else 0.0
@@ -144,5 +146,8 @@ def _max_effort_note(model: Model, x: FloatArray, joint: JointType) -> str:
         return ""
     unit = si_unit("max_actuator_velocity", joint)
     if model.lines == "speed":
-        return f"is the largest |effort| seen: eq. 1 is not reached (no sample below {low:.6g} {unit})"
-    return f"extrapolated to zero speed from |velocity| >= {low:.6g} {unit}"
+        return (
+            "is the largest |effort| seen: eq. 1 is not reached (no frontier sample below "
+            f"|velocity| {low:.6g} {unit}; samples inside the hull do not count)"
+        )
+    return f"extrapolated to zero speed from frontier samples at |velocity| >= {low:.6g} {unit}"

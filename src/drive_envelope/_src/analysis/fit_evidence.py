@@ -11,14 +11,30 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.line_choice import ON_LINE
 from drive_envelope._src.envelope.line_model import Model
+from drive_envelope._src.envelope.model import JointType
+from drive_envelope._src.params.table import si_unit
 
-__all__ = ["MAX_JSON_RANGES", "FitLine", "line_evidence", "sample_ranges"]
+__all__ = [
+    "MAX_JSON_RANGES",
+    "SPIKE_RATIO",
+    "WARNING",
+    "FitLine",
+    "line_evidence",
+    "sample_ranges",
+    "support_warnings",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 
 MAX_JSON_RANGES = 1000
 """Most runs of sample numbers a line lists in JSON (a long noisy log has many short runs)."""
+SPIKE_RATIO = 2.0
+"""A line's one deciding sample stands this many times above every other sample (in the line's
+quantity): the warning on it says so, it is most likely a spike."""
+WARNING = "warning: "
+"""Prefix of a note that warns: the fit's numbers may rest on a fluke (text reports print it as a
+warning line)."""
 
 
 def sample_ranges(indices: IntArray) -> list[tuple[int, int]]:
@@ -117,3 +133,57 @@ def _line(
         velocity_range=(float(x[index].min()), float(x[index].max())) if spans else None,
         effort_range=(float(y[index].min()), float(y[index].max())) if spans else None,
     )
+
+
+def support_warnings(
+    lines: tuple[FitLine, FitLine], x: FloatArray, y: FloatArray, joint: JointType, held: set[str]
+) -> list[str]:
+    """Warnings (notes starting with :data:`WARNING`) for each fitted line that rests on a fluke.
+
+    A line decided by a single frontier sample follows that sample wherever it lies, and so does a
+    line through a sample that stands more than :data:`SPIKE_RATIO` times above every other sample
+    (in the line's quantity: |effort| for eq. 1, |velocity| for eq. 2): one spike in a log of
+    saturated operation moves the cap by the spike's height. The warning names the sample (its
+    number, 1-based in the order given: the data row of a one-joint log) and its values, says how
+    far it stands above every other sample when that is more than :data:`SPIKE_RATIO` times, and
+    suggests ``--outlier-quantile``.
+
+    Args:
+        lines: The evidence of eq. 1 and eq. 2 (:func:`line_evidence`).
+        x: ``|velocity|`` of every sample [rad/s or m/s].
+        y: ``|effort|`` of every sample [N*m or N].
+        joint: Joint type (units of the message).
+        held: Parameters fixed by the user: a line whose cap is held is not decided by its samples.
+    """
+    speed_unit, effort_unit = si_unit("max_actuator_velocity", joint), si_unit("max_effort", joint)
+    caps = {"effort": "max_effort", "velocity": "max_actuator_velocity"}
+    warnings = []
+    for line in lines:
+        on = line.on_line
+        if not line.identified or on.size == 0 or caps[line.curve] in held:
+            continue
+        values, unit, what = (
+            (y, effort_unit, "|effort|") if line.curve == "effort" else (x, speed_unit, "|velocity|")
+        )
+        index = int(on[int(np.argmax(values[on]))])
+        rest = max(float(values[:index].max(initial=0.0)), float(values[index + 1 :].max(initial=0.0)))
+        value = float(values[index])
+        stands = value > SPIKE_RATIO * rest
+        if on.size > 1 and not stands:
+            continue
+        title = "eq. 1 (max_effort)" if line.curve == "effort" else "eq. 2 (max_actuator_velocity)"
+        support = "one sample, sample" if on.size == 1 else f"{on.size} samples, among them sample"
+        sample = (
+            f"{index + 1} (|velocity| {float(x[index]):.6g} {speed_unit}, |effort| {float(y[index]):.6g} "
+            f"{effort_unit})"
+        )
+        height = (
+            f"; its {what} is {value / rest:.3g} times the largest of all other samples ({rest:.6g} {unit})"
+            if stands
+            else ""
+        )
+        warnings.append(
+            f"{WARNING}{title} rests on {support} {sample}{height}: if it is a spike, refit with "
+            "--outlier-quantile (e.g. 0.01) or remove it"
+        )
+    return warnings

@@ -32,6 +32,7 @@ FIELD_LIMIT = csv.field_size_limit()
 
 _LINE_LIMIT = 1 << 20  # longest comment or header line read [characters]: memory stays bounded
 _READ_ERRORS = (OSError, EOFError, UnicodeDecodeError, zlib.error, csv.Error)  # a damaged or truncated file
+_Source = tuple[Path, int, str]  # (path, lines before the header, delimiter): where to read a cell again
 
 
 def _one_line(exc: BaseException) -> str:
@@ -123,11 +124,11 @@ def iter_csv_arrow(path: Path, columns: LogColumns, chunk_rows: int, label: str)
             # the per-chunk work (one pass per joint) does not repeat for every small block
             while sum(len(part["velocity"]) for part in pending) >= chunk_rows:
                 chunk, pending = _take(pending, chunk_rows)
-                yield _chunk(plan, chunk, codes, row)
+                yield _chunk(plan, chunk, codes, row, (path, skip, delimiter))
                 row += chunk_rows
         if pending:
             chunk, pending = _take(pending, sum(len(part["velocity"]) for part in pending))
-            yield _chunk(plan, chunk, codes, row)
+            yield _chunk(plan, chunk, codes, row, (path, skip, delimiter))
     except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
         # pyarrow's message has no reliable row number: rescan with the standard library for one
         for _ in iter_csv_python(path, columns, chunk_rows, label):
@@ -145,16 +146,21 @@ def _take(parts: list[dict[str, Any]], rows: int) -> tuple[dict[str, Any], list[
     return head, ([rest] if len(rest["velocity"]) else [])
 
 
-def _chunk(plan: ColumnPlan, columns: dict[str, Any], codes: JointCodes, row: int) -> LogChunk:
+def _chunk(
+    plan: ColumnPlan, columns: dict[str, Any], codes: JointCodes, row: int, source: _Source
+) -> LogChunk:
     arrays = {role: columns[role] for role in plan.numeric}
-    return make_chunk(plan, arrays, columns.get("joint"), codes, row)
+
+    def text(role: str, index: int) -> str | None:  # only for a message: the file is read again
+        return _cell_at(*source, row + index, plan.position[role])
+
+    return make_chunk(plan, arrays, columns.get("joint"), codes, row, text)
 
 
 def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
     """Chunks of a CSV log read by the standard library's ``csv`` module."""
     skip, header, delimiter = csv_header(path, label)
     plan = ColumnPlan(header, columns, label)
-    width = max(plan.position.values()) + 1
     codes = JointCodes()
     row = 1
     with _open_text(path) as handle:
@@ -172,10 +178,11 @@ def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str
             if not block:
                 return
             for offset, fields in enumerate(block):
-                if len(fields) < width:
+                if len(fields) != len(header):
+                    line = _line_of(path, skip, delimiter, row + offset)
                     raise InputError(
-                        f"{label}: row {row + offset}: {len(fields)} fields, the header has {len(header)} "
-                        f"({', '.join(header)})"
+                        f"{label}: row {row + offset} (line {line}): {len(fields)} fields, the header has "
+                        f"{len(header)} ({', '.join(header)})"
                     )
             arrays = _parse_block(block, plan, row)
             joint = None
@@ -183,8 +190,40 @@ def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str
                 column = plan.position["joint"]
                 names, inverse = np.unique([fields[column].strip() for fields in block], return_inverse=True)
                 joint = codes.encode(list(names), inverse)
-            yield make_chunk(plan, arrays, joint, codes, row)
+
+            def text(role: str, index: int, block: list[list[str]] = block) -> str:
+                return block[index][plan.position[role]]
+
+            yield make_chunk(plan, arrays, joint, codes, row, text)
             row += len(block)
+
+
+def _data_rows(path: Path, skip: int, delimiter: str) -> Iterator[tuple[list[str], int]]:
+    """The non-blank data rows of a CSV log with the line (1-based, of the file) each ends on."""
+    with _open_text(path) as handle:
+        for _ in range(skip + 1):
+            handle.readline()
+        reader = csv.reader(handle, delimiter=delimiter)
+        for fields in reader:
+            if fields:
+                yield fields, skip + 1 + reader.line_num
+
+
+def _line_of(path: Path, skip: int, delimiter: str, row: int) -> int:
+    """The line of the file data row ``row`` (1-based) ends on: read again, for an error message."""
+    for number, (_, line) in enumerate(_data_rows(path, skip, delimiter), start=1):
+        if number == row:
+            return line
+    return 0  # pragma: no cover - the row was read before
+
+
+def _cell_at(path: Path, skip: int, delimiter: str, row: int, column: int) -> str | None:
+    """The text of data row ``row``'s field ``column``, read again (for an error message)."""
+    try:
+        fields = next(itertools.islice(_data_rows(path, skip, delimiter), row - 1, None))[0]
+    except (StopIteration, *_READ_ERRORS):
+        return None
+    return fields[column] if column < len(fields) else None
 
 
 def _parse_floats(block: list[list[str]], column: int) -> tuple[Any, tuple[int, str] | None]:

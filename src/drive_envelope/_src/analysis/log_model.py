@@ -1,51 +1,77 @@
-"""The data model of a log and the rules every reader shares: which column is which, finite cells.
+"""The data model of a log and the rules every reader shares: columns, units, finite cells.
 
 A log's header is matched against :class:`LogColumns` once, by :class:`ColumnPlan`: a column named
 twice (``time,velocity,velocity,effort``), two names that differ only in case or surrounding spaces,
 or one column given two roles (``--velocity-column effort``) is an error, never a silent first pick.
 Names are compared with surrounding spaces removed, so ``time, velocity, effort`` reads as written.
-Numbers are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
+A header may carry a unit after the name (``velocity [rpm]``, ``effort (mNm)``, see
+:mod:`.log_units`): the column is found by its name (``velocity``) or its whole text, and its values
+are converted to SI. Numbers in chunks are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
+Time may go back (a log of several episodes, each from 0): the check counts each jump back as the
+start of an episode and says so (:mod:`.check`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_units import column_scale, split_header
+from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 
-__all__ = ["ROLES", "ColumnPlan", "JointCodes", "LogChunk", "LogColumns", "make_chunk"]
+__all__ = [
+    "ROLES",
+    "CellText",
+    "ColumnPlan",
+    "JointCodes",
+    "LogChunk",
+    "LogColumns",
+    "make_chunk",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
+CellText = Callable[[str, int], "str | None"]
+"""``text(role, index)``: the text of a chunk's cell as written in the file, or None if unknown."""
 
 ROLES = ("velocity", "effort", "time", "joint")
 """What a log column can hold, in the order columns are resolved."""
 
 _FLAGS = {role: f"--{role}-column" for role in ROLES}
+_INFINITE = ("inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class LogColumns:
-    """Which columns of a log hold what; the defaults are those of ``drive-envelope simulate``."""
+    """Which columns of a log hold what; the defaults are those of ``drive-envelope simulate``.
+
+    A name finds the column of that name, or one whose header is that name and a unit
+    (``velocity`` finds ``velocity [rpm]``); the whole header text (``velocity [rpm]``) works too.
+    """
 
     velocity: str = "velocity"
-    """Joint velocity column [rad/s or m/s]."""
+    """Joint velocity column [rad/s or m/s, or the unit in its header]."""
     effort: str = "effort"
-    """Total actuator effort column [N*m or N]."""
+    """Total actuator effort column [N*m or N, or the unit in its header]."""
     time: str | None = "time"
-    """Time column [s], used when present (``None``: never); it locates violations in time."""
+    """Time column [s, or the unit in its header], used when present (``None``: never); it locates
+    violations in time."""
     joint: str | None = "joint"
-    """Joint-name column of a long-format log with several joints, used when present."""
+    """Joint-name column of a long-format log with several joints, used when present (no unit)."""
     require_time: bool = False
     """Raise when the time column is absent (set when the user named it explicitly)."""
     require_joint: bool = False
     """Raise when the joint column is absent (set when the user named it explicitly)."""
+    joint_type: JointType | None = None
+    """Joint type the log is read for, which fixes the SI unit a header's unit converts to (rad/s
+    and N*m, or m/s and N); a unit of the other type is an error. None: either, as the units say
+    (both columns' units must then agree)."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -64,6 +90,9 @@ class LogChunk:
     """Joint names seen so far in the whole log; codes are stable across chunks."""
     first_row: int
     """Row number of the first row (1 = the first data row of the source)."""
+    joint_type: JointType | None = None
+    """Joint type the units in the header imply (or :attr:`LogColumns.joint_type`); None when no
+    read column has a unit that tells (SI numbers fit either)."""
 
     def __len__(self) -> int:
         return int(self.velocity.shape[0])
@@ -73,13 +102,17 @@ class ColumnPlan:
     """Where each role's column sits in a header, checked for duplicates and double use.
 
     Attributes:
-        header: The header names, surrounding spaces removed.
+        header: The header cells, surrounding spaces removed (names with their units).
         position: Role (``velocity``, ``effort``, ``time``, ``joint``) -> index in ``header``.
         numeric: The roles read as numbers: velocity, effort and, when present, time.
+        scale: Numeric role -> factor to SI of its values (1.0 without a unit in the header).
+        unit: Numeric role -> the unit written in its header ("" for none).
+        joint_type: The joint type the units imply, or the one asked for; None when nothing tells.
     """
 
     def __init__(self, header: Sequence[str], columns: LogColumns, label: str) -> None:
         self.header = [str(name).strip() for name in header]
+        self.names = [split_header(name)[0] for name in self.header]
         self.label = label
         self.position: dict[str, int] = {}
         wanted = {
@@ -93,9 +126,25 @@ class ColumnPlan:
             if name is not None:
                 self._resolve(role, str(name).strip(), required)
         self.numeric: list[str] = [role for role in ("velocity", "effort", "time") if role in self.position]
+        self.scale: dict[str, float] = {}
+        self.unit: dict[str, str] = {}
+        implied: dict[str, JointType] = {}
+        for role in self.numeric:
+            self.unit[role] = split_header(self.name(role))[1]
+            where = f"{label}: column {self.name(role)!r}"
+            self.scale[role], kind = column_scale(role, self.unit[role], columns.joint_type, where)
+            if kind is not None:
+                implied[role] = kind
+        if len(set(implied.values())) > 1:
+            raise InputError(
+                f"{label}: column {self.name('velocity')!r} has the unit of a {implied['velocity']} joint "
+                f"but column {self.name('effort')!r} that of a {implied['effort']} joint; expected one "
+                "joint type (rad/s with N*m, or m/s with N)"
+            )
+        self.joint_type: JointType | None = columns.joint_type or next(iter(implied.values()), None)
 
     def name(self, role: str) -> str:
-        """The header name of ``role``'s column."""
+        """The header text of ``role``'s column (with its unit, as written)."""
         return self.header[self.position[role]]
 
     @property
@@ -108,16 +157,23 @@ class ColumnPlan:
         """Whether the log has a time column."""
         return "time" in self.position
 
+    def _matches(self, role: str, index: int, name: str, fold: bool) -> bool:
+        """Whether column ``index`` is ``name``: its whole header, or its name without the unit.
+
+        A joint-name column matches by its whole header only: a unit means a number column.
+        """
+        texts = [self.header[index]] if role == "joint" else [self.header[index], self.names[index]]
+        return any((text.casefold() == name.casefold()) if fold else (text == name) for text in texts)
+
     def _resolve(self, role: str, name: str, required: bool) -> None:
-        folded = name.casefold()
-        similar = [i for i, column in enumerate(self.header) if column.casefold() == folded]
+        similar = [i for i in range(len(self.header)) if self._matches(role, i, name, fold=True)]
         if len(similar) > 1:
             found = ", ".join(f"{self.header[i]!r} (column {i + 1})" for i in similar)
             raise InputError(
                 f"{self.label}: column {name!r} is ambiguous: the header has {found}; "
                 "expected each column name once"
             )
-        exact = [i for i in similar if self.header[i] == name]
+        exact = [i for i in similar if self._matches(role, i, name, fold=False)]
         if not exact:
             if required:
                 columns = ", ".join(self.header) or "none"
@@ -165,8 +221,10 @@ def _first_nonfinite(values: FloatArray) -> int | None:
     return int(bad[0]) if bad.size else None
 
 
-def _check_finite(plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: int) -> None:
-    """Refuse NaN and inf cells, naming the earliest bad row (and its column)."""
+def _check_finite(
+    plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: int, text: CellText | None
+) -> None:
+    """Refuse NaN and inf cells, naming the earliest bad row (and its column, and the cell's text)."""
     found = [
         (index, role) for role, values in arrays.items() if (index := _first_nonfinite(values)) is not None
     ]
@@ -174,10 +232,31 @@ def _check_finite(plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: in
         index, role = min(found)
         value = float(arrays[role][index])
         what = "an empty cell or NaN" if math.isnan(value) else repr(value)
+        cell = None if text is None or math.isnan(value) else text(role, index)
+        if cell is not None and cell.strip().lower() not in _INFINITE:
+            what += f" (the cell reads {cell.strip()!r}, beyond the float range of about 1.8e308)"
         raise InputError(
             f"{plan.label}: row {first_row + index}, column {plan.name(role)!r}: got {what}; "
             "expected a finite number"
         )
+
+
+def _to_si(plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: int) -> dict[str, FloatArray]:
+    """The arrays scaled by the units of their headers; a value the scale takes beyond float range raises."""
+    scaled = dict(arrays)
+    for role, scale in plan.scale.items():
+        if scale == 1.0:
+            continue
+        with np.errstate(over="ignore"):
+            scaled[role] = arrays[role] * scale
+        index = _first_nonfinite(scaled[role])
+        if index is not None:
+            raise InputError(
+                f"{plan.label}: row {first_row + index}, column {plan.name(role)!r}: "
+                f"{float(arrays[role][index])!r} {plan.unit[role]} is beyond the float range in SI; "
+                "expected a finite number"
+            )
+    return scaled
 
 
 def make_chunk(
@@ -186,14 +265,22 @@ def make_chunk(
     joint: IntArray | None,
     codes: JointCodes,
     first_row: int,
+    text: CellText | None = None,
 ) -> LogChunk:
-    """A validated :class:`LogChunk` from the numeric arrays of ``plan.numeric`` (keyed by role)."""
-    _check_finite(plan, arrays, first_row)
+    """A validated :class:`LogChunk` from the numeric arrays of ``plan.numeric`` (keyed by role).
+
+    The values are checked finite and converted to SI by the units in the header. ``text`` gives
+    the written text of a cell for messages (a CSV reader's), when known.
+    """
+    _check_finite(plan, arrays, first_row, text)
+    arrays = _to_si(plan, arrays, first_row)
+    time = arrays.get("time")
     return LogChunk(
         velocity=arrays["velocity"],
         effort=arrays["effort"],
-        time=arrays.get("time"),
+        time=time,
         joint=joint,
         names=codes.names,
         first_row=first_row,
+        joint_type=plan.joint_type,
     )

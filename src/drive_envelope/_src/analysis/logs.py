@@ -8,8 +8,13 @@ starting with ``#`` (metadata comments) and blank lines are skipped; spaces arou
 ignored. A column name given twice (or twice up to case), or one column named for two roles, is an
 error: a check must never read one of two ``velocity`` columns and ignore the other.
 
+A column header may give the column's unit after its name, ``velocity [rpm]`` or ``effort (mNm)``
+(:mod:`.log_units`): the column is found by its name or its whole header, and its values are
+converted to SI; a unit unknown or of the wrong dimension is an error naming the column. Time must
+never decrease within a joint (equal consecutive times are fine).
+
 Rows are numbered from 1 = the first data row after the header; every error names the source, the
-row and the column. Numbers are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
+row and the column. Numbers in the chunks are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
 """
 
 from __future__ import annotations
@@ -70,8 +75,10 @@ def iter_log(
 
     Raises:
         InputError: missing file or column, a column named twice or used twice, a damaged file,
-            non-numeric/empty/NaN/infinite cell (naming the row and column), an empty log, or
-            Parquet without pyarrow.
+            non-numeric/empty/NaN/infinite cell (naming the row and column), a row with more or
+            fewer fields than the header, a unit in a header that is unknown or of the wrong
+            dimension, a time below the one before it (of the same joint), an empty log, or Parquet
+            without pyarrow.
     """
     columns = columns or LogColumns()
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
@@ -118,6 +125,7 @@ def read_log(source: Any, columns: LogColumns | None = None, *, engine: ReadEngi
         joint=join("joint"),
         names=last.names,
         first_row=1,
+        joint_type=last.joint_type,
     )
 
 

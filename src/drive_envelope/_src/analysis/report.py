@@ -153,6 +153,11 @@ class JointCheck:
     """Samples beyond the no-load speed with zero effort: the drive let go, as PhysX's does."""
     time_released: float | None = None
     """Time spent released [s]; None without a time column."""
+    time_resets: int = 0
+    """Samples whose time is below the one before: the log holds ``time_resets + 1`` episodes (each
+    jump back counts 0 s in :attr:`duration`)."""
+    first_time_reset: int | None = None
+    """Row of the first such sample (the data row of a one-joint log), or None."""
 
     @property
     def fraction_outside(self) -> float:
@@ -218,6 +223,8 @@ def _joint_dict(check: JointCheck, tolerance: float) -> dict[str, Any]:
         "duration": json_float(check.duration),
         "time_outside": json_float(check.time_outside),
         "time_released": json_float(check.time_released),
+        "time_resets": check.time_resets,
+        "first_time_reset": check.first_time_reset,
         "effort": _margin_dict(check.effort),
         "velocity": None if check.velocity is None else _margin_dict(check.velocity),
     }

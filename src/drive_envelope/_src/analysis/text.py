@@ -8,7 +8,7 @@ from pathlib import Path
 
 from drive_envelope._src.analysis.check import CheckReport, JointCheck, MarginSummary
 from drive_envelope._src.analysis.fit import FitResult
-from drive_envelope._src.analysis.fit_evidence import sample_ranges
+from drive_envelope._src.analysis.fit_evidence import WARNING, sample_ranges
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.params.table import si_unit
@@ -73,6 +73,11 @@ def format_check(report: CheckReport) -> str:
     for check in report.joints:
         status = "ok" if check.fraction_outside <= options.tolerance else "FAIL"
         duration = "" if check.duration is None else f" over {check.duration:.6g} s"
+        if check.time_resets:
+            duration += (
+                f" in {check.time_resets + 1} episodes (time goes back {check.time_resets} time(s), "
+                f"first at row {check.first_time_reset})"
+            )
         lines.append("")
         lines.append(
             f"joint {check.joint!r}: {check.samples} samples{duration}, {check.samples_outside} outside "
@@ -132,7 +137,7 @@ def format_fit(result: FitResult) -> str:
         else:
             residual_rows.append([f"{label} [{unit}]", "0", "-", "-"])
     lines.append(format_table(["line", "samples", "rms", "max"], residual_rows))
-    lines.extend(f"note: {note}" for note in result.notes)
+    lines.extend(note if note.startswith(WARNING) else f"note: {note}" for note in result.notes)
     return "\n".join(lines)
 
 

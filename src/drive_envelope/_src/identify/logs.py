@@ -13,10 +13,12 @@ header are skipped) or Parquet file (needs pyarrow) with the columns
 ``torque_enable``         optional     1 = drive powered, 0 = unpowered (free swing); 1 when absent
 ========================  ===========  =========================================================
 
-Other columns are ignored. Sample ``i``'s commands act from ``time[i]`` to ``time[i + 1]``. A JSON
-sidecar beside the log (``NAME.json`` for ``NAME.csv``) may give ``kp_duty_per_rad``, the servo
-firmware's position gain as PWM duty per radian of error (a voltage-driven servo such as a
-Dynamixel: see :mod:`drive_envelope._src.identify.stand`); other sidecar keys are ignored.
+A header may give its column's unit after the name (``position [deg]``, ``time (ms)``): the values
+are converted to SI, as ``check`` reads its logs. Other columns are ignored. Sample ``i``'s commands
+act from ``time[i]`` to ``time[i + 1]``. A JSON sidecar beside the log (``NAME.json`` for
+``NAME.csv``) may give ``kp_duty_per_rad``, the servo firmware's position gain as PWM duty per radian
+of error (a voltage-driven servo such as a Dynamixel: see :mod:`drive_envelope._src.identify.stand`);
+other sidecar keys are ignored.
 """
 
 from __future__ import annotations
@@ -130,25 +132,59 @@ def read_bench_log(path: str | os.PathLike[str]) -> BenchLog:
     )
 
 
-def _plan(header: list[str], label: str) -> dict[str, int]:
-    """Column index of each known column; a name twice (up to case) or a missing required one is an error."""
+_ROLES = {
+    "time": "time",
+    "position": "position",
+    "target_position": "position",
+    "velocity": "velocity",
+    "target_velocity": "velocity",
+    "effort": "effort",
+}
+"""The quantity of each column that may carry a unit in its header (``torque_enable`` takes none)."""
+
+
+def _plan(header: list[str], label: str) -> tuple[dict[str, int], dict[str, float]]:
+    """Column index and SI scale of each known column.
+
+    A header may give a unit after the name (``position [deg]``, ``time (ms)``), read as the
+    check's logs are (:func:`~drive_envelope._src.analysis.log_units.column_scale`). A name twice (up
+    to case), a missing required column, a bad unit, or units of two joint types are errors.
+    """
+    from drive_envelope._src.analysis.log_units import column_scale, split_header
+
     plan: dict[str, int] = {}
-    lowered = [name.strip().lower() for name in header]
+    scales: dict[str, float] = {}
+    split = [split_header(name) for name in header]
+    lowered = [name.lower() for name, _ in split]
+    implied: dict[str, str] = {}
     for column in COLUMNS:
         hits = [i for i, name in enumerate(lowered) if name == column]
         if len(hits) > 1:
             raise InputError(
                 f"{label}: column {column!r} is ambiguous: the header names it {len(hits)} times"
             )
-        if hits:
-            plan[column] = hits[0]
+        if not hits:
+            continue
+        plan[column] = hits[0]
+        unit = split[hits[0]][1]
+        where = f"{label}: column {header[hits[0]].strip()!r}"
+        if column not in _ROLES:
+            if unit:
+                raise InputError(f"{where}: expected no unit (0 or 1 per sample), got {unit!r}")
+            continue
+        scales[column], joint = column_scale(_ROLES[column], unit, None, where)
+        if joint is not None:
+            implied[column] = joint
+    if len(set(implied.values())) > 1:
+        kinds = ", ".join(f"{column} {kind}" for column, kind in implied.items())
+        raise InputError(f"{label}: the header units are of two joint types ({kinds}); expected one")
     missing = [column for column in _REQUIRED if column not in plan]
     if missing:
         raise InputError(
             f"{label}: missing column(s) {', '.join(map(repr, missing))}; a bench log needs "
             f"{', '.join(_REQUIRED)} (optional: {', '.join(COLUMNS[3:])}); found {', '.join(header)}"
         )
-    return plan
+    return plan, scales
 
 
 def _open_text(file: Path) -> Any:
@@ -170,13 +206,14 @@ def _read_csv(file: Path, label: str) -> dict[str, FloatArray]:
         header, *rows = [fields for fields in csv.reader(lines, delimiter=delimiter) if fields]
     except csv.Error as exc:
         raise InputError(f"{label}: cannot read as CSV: {' '.join(str(exc).split())}") from None
-    plan = _plan([name.strip() for name in header], label)
+    plan, scales = _plan([name.strip() for name in header], label)
     width = max(plan.values()) + 1
     for row, fields in enumerate(rows, start=1):
         if len(fields) < width:
             raise InputError(f"{label}: row {row}: {len(fields)} fields, the header has {len(header)}")
     return {
-        column: _numbers([fields[index] for fields in rows], column, label) for column, index in plan.items()
+        column: _numbers([fields[index] for fields in rows], column, label) * scales.get(column, 1.0)
+        for column, index in plan.items()
     }
 
 
@@ -218,7 +255,7 @@ def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
         table = pq.read_table(file)
     except (OSError, pa.ArrowException) as exc:
         raise InputError(f"{label}: cannot read as Parquet: {' '.join(str(exc).split())}") from None
-    plan = _plan(list(table.column_names), label)
+    plan, scales = _plan(list(table.column_names), label)
     columns = {}
     for column, index in plan.items():
         data = table.column(index)
@@ -233,7 +270,7 @@ def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
             raise InputError(f"{label}: row {row}, column {column!r}: got an empty cell; expected a number")
         values = np.asarray(data.to_numpy(zero_copy_only=False), dtype=np.float64)
         _check_finite(values, column, label)
-        columns[column] = values
+        columns[column] = values * scales.get(column, 1.0)
     return columns
 
 

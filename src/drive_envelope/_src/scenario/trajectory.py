@@ -7,6 +7,8 @@ JSON with the same columns plus the metadata, or Parquet (needs pyarrow) with th
 schema; the suffix picks the format (``.csv``/``.txt``/none, ``.json``, ``.parquet``/``.pq``). Files
 are written atomically and streamed in blocks, so memory does not grow with the text. Every value
 is finite: a NaN or inf in a trajectory, or in a file read as one, is an :class:`InputError`.
+:func:`read_operating_log` reads only the velocity, effort and (optional) time of the same files,
+for plots of bench logs that have no position.
 """
 
 from __future__ import annotations
@@ -31,8 +33,10 @@ from drive_envelope._src.io.files import read_text
 __all__ = [
     "COLUMNS",
     "TRAJECTORY_FORMATS",
+    "OperatingLog",
     "Trajectory",
     "TrajectoryFormat",
+    "read_operating_log",
     "read_trajectory",
     "save_trajectory",
     "trajectory_format",
@@ -251,7 +255,70 @@ def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolut
     text = read_text(file)
     if suffix == ".json":
         return _from_json(text, file)
-    return _from_csv(text, file, joint)
+    arrays = _csv_columns(text, file, COLUMNS, ())
+    return Trajectory(
+        time=arrays["time"],
+        position=arrays["position"],
+        velocity=arrays["velocity"],
+        effort=arrays["effort"],
+        joint=joint,
+        name=file.stem,
+    )
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class OperatingLog:
+    """The columns of a trajectory file or bench log that a plot draws (no position needed)."""
+
+    velocity: FloatArray
+    """Joint velocity [rad/s or m/s]."""
+    effort: FloatArray
+    """Total actuator effort [N*m or N]."""
+    time: FloatArray | None
+    """Time [s], or None when the file has no time column."""
+    engine: str = ""
+    """Engine that produced it (from a JSON or Parquet trajectory's metadata), empty if unknown."""
+    name: str = ""
+    """Scenario name from the metadata, else the file's stem."""
+
+
+_POINTS = ("velocity", "effort")
+_POINTS_OPTIONAL = ("time",)
+
+
+def read_operating_log(path: str | os.PathLike[str]) -> OperatingLog:
+    """Read the ``velocity`` and ``effort`` (and, when present, ``time``) columns of a trajectory file.
+
+    The formats are those of :func:`read_trajectory`, which needs every column; here ``position``
+    is not read and ``time`` may be absent, so a bench log ``time,velocity,effort`` (or
+    ``velocity,effort``) reads too. Numbers are SI, as in a trajectory (no units in headers).
+
+    Raises:
+        InputError: missing file, a missing or repeated velocity/effort/time column, columns of
+            different lengths (JSON), or a cell that is not a finite number.
+    """
+    file = Path(path)
+    suffix = file.suffix.lower()
+    if _SUFFIXES.get(suffix) == "parquet":
+        from drive_envelope._src.scenario.trajectory_parquet import read_parquet
+
+        arrays, header = read_parquet(file, _POINTS, optional=_POINTS_OPTIONAL)
+        engine, name = header.get("engine", ""), header.get("name", "")
+    else:
+        text = read_text(file)
+        if suffix == ".json":
+            data = _json_object(text, file)
+            arrays = _json_columns(data, file, _POINTS, _POINTS_OPTIONAL)
+            engine, name = data.get("engine", ""), data.get("name", "")
+        else:
+            arrays, engine, name = _csv_columns(text, file, _POINTS, _POINTS_OPTIONAL), "", ""
+    return OperatingLog(
+        velocity=arrays["velocity"],
+        effort=arrays["effort"],
+        time=arrays.get("time"),
+        engine=str(engine),
+        name=str(name or file.stem),
+    )
 
 
 def _cell(value: str | None, where: str) -> float:
@@ -266,42 +333,52 @@ def _cell(value: str | None, where: str) -> float:
     return number
 
 
-def _from_csv(text: str, file: Path, joint: JointType) -> Trajectory:
+def _expected(required: tuple[str, ...], optional: tuple[str, ...]) -> str:
+    """``header time,position,velocity,effort``, or the columns needed and those that may be absent."""
+    if not optional:
+        return f"header {','.join(required)}"
+    return f"columns {','.join(required)} ({', '.join(optional)} optional)"
+
+
+def _csv_columns(
+    text: str, file: Path, required: tuple[str, ...], optional: tuple[str, ...]
+) -> dict[str, FloatArray]:
+    """The ``required`` columns of a CSV trajectory and those of ``optional`` that it has."""
     reader = csv.reader(io.StringIO(text))
     try:
         header = [name.strip() for name in next(reader, [])]
         rows = list(reader)
     except csv.Error as exc:  # a field over the csv module's limit
         raise InputError(f"{file}: cannot read as CSV: {exc}") from None
-    repeated = sorted({name for name in header if name in COLUMNS and header.count(name) > 1})
+    wanted = required + optional
+    repeated = sorted({name for name in header if name in wanted and header.count(name) > 1})
     if repeated:
         raise InputError(f"{file}: column {repeated[0]!r} appears {header.count(repeated[0])} times")
-    missing = [c for c in COLUMNS if c not in header]
+    missing = [c for c in required if c not in header]
     if missing:
-        raise InputError(
-            f"{file}: missing column(s) {', '.join(missing)}; expected header {','.join(COLUMNS)}"
+        with_unit = [cell for cell in header if cell.split("[")[0].split("(")[0].strip() in missing]
+        hint = (
+            f" (units in headers, as in {with_unit[0]!r}, are not read here: write SI numbers)"
+            if with_unit
+            else ""
         )
-    index = {column: header.index(column) for column in COLUMNS}
-    columns: dict[str, list[float]] = {c: [] for c in COLUMNS}
+        raise InputError(
+            f"{file}: missing column(s) {', '.join(missing)}; expected {_expected(required, optional)}{hint}"
+        )
+    index = {column: header.index(column) for column in wanted if column in header}
+    columns: dict[str, list[float]] = {c: [] for c in index}
     for line, row in enumerate(rows, start=2):
         if not row:
             continue
-        for column in COLUMNS:
-            cell = row[index[column]] if index[column] < len(row) else None
+        for column, position in index.items():
+            cell = row[position] if position < len(row) else None
             columns[column].append(_cell(cell, f"{file}: line {line}, column {column!r}"))
-    if not columns["time"]:
+    if not columns[required[0]]:
         raise InputError(f"{file}: no data rows")
-    return Trajectory(
-        time=np.asarray(columns["time"]),
-        position=np.asarray(columns["position"]),
-        velocity=np.asarray(columns["velocity"]),
-        effort=np.asarray(columns["effort"]),
-        joint=joint,
-        name=file.stem,
-    )
+    return {column: np.asarray(values) for column, values in columns.items()}
 
 
-def _from_json(text: str, file: Path) -> Trajectory:
+def _json_object(text: str, file: Path) -> dict[str, Any]:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -310,8 +387,17 @@ def _from_json(text: str, file: Path) -> Trajectory:
         raise InputError(f"{file}: malformed JSON: nested too deeply") from None
     if not isinstance(data, dict):
         raise InputError(f"{file}: expected a JSON object with keys {', '.join(COLUMNS)}")
+    return data
+
+
+def _json_columns(
+    data: dict[str, Any], file: Path, required: tuple[str, ...], optional: tuple[str, ...]
+) -> dict[str, FloatArray]:
+    """The ``required`` columns of a JSON trajectory and those of ``optional`` that it has."""
     arrays = {}
-    for column in COLUMNS:
+    for column in required + optional:
+        if column in optional and column not in data:
+            continue
         if not isinstance(data.get(column), list):
             raise InputError(f"{file}: key {column!r}: expected a list of numbers")
         arrays[column] = np.asarray(
@@ -320,6 +406,12 @@ def _from_json(text: str, file: Path) -> Trajectory:
     if len({values.shape for values in arrays.values()}) != 1:
         lengths = ", ".join(f"{c} {values.shape[0]}" for c, values in arrays.items())
         raise InputError(f"{file}: the columns have different lengths ({lengths}); expected one per row")
+    return arrays
+
+
+def _from_json(text: str, file: Path) -> Trajectory:
+    data = _json_object(text, file)
+    arrays = _json_columns(data, file, COLUMNS, ())
     joint = data.get("joint", "revolute")
     if joint not in ("revolute", "prismatic"):
         raise InputError(f"{file}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")

@@ -59,8 +59,12 @@ def write_parquet(
         pq.write_table(table, tmp)
 
 
-def read_parquet(path: Path, names: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
+def read_parquet(
+    path: Path, names: tuple[str, ...], *, optional: tuple[str, ...] = ()
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """Read columns ``names`` (as finite float64 arrays) and the header of a Parquet trajectory.
+
+    Columns of ``optional`` are read too when the file has them.
 
     A file without the header (written elsewhere) gives ``{"joint": "revolute", "metadata": {}}``.
 
@@ -76,6 +80,7 @@ def read_parquet(path: Path, names: tuple[str, ...]) -> tuple[dict[str, Any], di
         missing = [column for column in names if column not in schema.names]
         if missing:
             raise InputError(f"{path}: missing column(s) {', '.join(missing)}; expected {', '.join(names)}")
+        names = names + tuple(column for column in optional if column in schema.names)
         repeated = [column for column in names if schema.names.count(column) > 1]
         if repeated:
             raise InputError(

@@ -29,8 +29,9 @@ def register(subparsers: Any) -> None:
         "-t",
         action="append",
         default=[],
-        metavar="CSV",
-        help="a trajectory written by `drive-envelope simulate` (CSV or JSON); repeat for several",
+        metavar="FILE",
+        help="a trajectory written by `drive-envelope simulate` (CSV, JSON or Parquet) or a bench log "
+        "with velocity and effort columns (time optional, SI numbers); repeat for several",
     )
     add_output_argument(parser, "figure file: .png, .svg or .pdf", required=True, metavar="FIG")
     parser.add_argument(
@@ -50,7 +51,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.plots.curve import OperatingPoints
     from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
-    from drive_envelope._src.scenario.trajectory import read_trajectory
+    from drive_envelope._src.scenario.trajectory import read_operating_log
 
     output = checked_output(args.output)
     assert output is not None  # required
@@ -59,7 +60,7 @@ def _run(args: argparse.Namespace) -> int:
     _check_plottable(envelope, args.envelope)
     points = []
     for path in args.trajectory:
-        trajectory = read_trajectory(path, joint=envelope.joint)
+        trajectory = read_operating_log(path)  # velocity and effort; position is not drawn
         label = f"{trajectory.name} ({trajectory.engine})" if trajectory.engine else trajectory.name
         points.append(
             OperatingPoints(
