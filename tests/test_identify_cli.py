@@ -109,6 +109,14 @@ def test_json_object_has_the_issue_keys(
         "angle_offset",
     }  # fmt: skip
     for name, entry in data["parameters"].items():
+        if name == "stiffness":  # [servo] duty_per_rad = 1: stiffness follows max_effort per log
+            assert entry == {
+                "value": None,
+                "std": None,
+                "fixed": True,
+                "derived": "duty_per_rad * max_effort, per log",
+            }
+            continue
         assert set(entry) == {"value", "std", "fixed"}
         assert entry["fixed"] == (name not in [*FIT.split(","), "dynamic_friction"])
     assert data["parameters"]["armature"]["std"] is None
@@ -222,3 +230,100 @@ def test_bound_reached_is_a_warning(
     ]
     assert main(argv) == 0
     assert "max_effort = 0.48 ended at its lower bound 0.48" in capsys.readouterr().err
+
+
+# --- what a new user got wrong: sidecars, stands and outputs ----------------------------------------
+
+
+def _sidecar(log: Path, **data: object) -> None:
+    log.with_suffix(".json").write_text(json.dumps(data), encoding="utf-8")
+
+
+def _warnings(main: Callable[[list[str]], int], argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    assert main([*argv, "--generations", "1", "--population", "2"]) == 0
+    return capsys.readouterr().err
+
+
+def test_a_sidecar_copied_from_another_log_is_a_warning(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    _sidecar(logs[0], name="2026-01-15_10h30m10", kp_duty_per_rad=2.3, mass_kg=0.49, length_m=0.1)
+    err = _warnings(main, ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort"], capsys)
+    assert f"{logs[0]}: its sidecar names the log '2026-01-15_10h30m10': a sidecar copied" in err
+
+
+def test_a_sidecar_bench_that_differs_from_the_stand_is_a_warning(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    _sidecar(logs[0], name="run0", mass_kg=1.5, length_m=0.1)  # the stand says 0.49 kg at 0.1 m
+    err = _warnings(main, ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort"], capsys)
+    assert "its sidecar gives mass_kg = 1.5 but" in err and "has pendulum.mass = 0.49" in err
+    assert "length_m" not in err
+
+
+def test_a_stand_without_the_sidecars_pendulum_is_a_warning(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    text = stand.read_text().replace("[pendulum]\nmass = 0.49\ndistance = 0.1\n", "")
+    stand.write_text(text, encoding="utf-8")
+    _sidecar(logs[0], name="run0", mass_kg=0.49, length_m=0.1)
+    err = _warnings(main, ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort"], capsys)
+    assert "its sidecar gives a pendulum (mass_kg = 0.49) but" in err and "has no [pendulum]" in err
+
+
+def test_a_log_without_the_duty_gain_the_others_have_is_a_warning(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    _sidecar(logs[0], name="run0", kp_duty_per_rad=2.0)
+    argv = [
+        "identify",
+        str(logs[0]),
+        "--validate",
+        str(logs[1]),
+        "--stand",
+        str(stand),
+        "--fit",
+        "max_effort",
+    ]
+    err = _warnings(main, argv, capsys)
+    assert f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's" in err
+    assert str(logs[0]) + ":" not in err  # matching sidecars say nothing
+
+
+def test_stiffness_tied_to_the_duty_gain_is_shown_as_derived(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    assert (
+        main(["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort", "--generations", "1"])
+        == 0
+    )
+    (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("stiffness")]
+    assert "duty_per_rad * max_effort, per log" in row and " 0 " not in row
+
+
+def test_outputs_are_checked_before_the_search(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    for flag, name in (("-o", "missing/e.toml"), ("--plot", "missing/e.png")):
+        target = str(stand.parent / name)
+        argv = ["identify", str(logs[0]), "--stand", str(stand), flag, target]
+        assert main(argv) == 2
+        assert "cannot write: folder" in capsys.readouterr().err
+
+
+def test_zero_generations_and_unknown_stand_keys(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    stand, logs = bench
+    assert main(["identify", str(logs[0]), "--stand", str(stand), "--generations", "0"]) == 2
+    assert "--generations" in capsys.readouterr().err
+    stand.write_text("max_effort = 1\n" + STAND, encoding="utf-8")  # a top-level key, as in an envelope
+    assert main(["identify", str(logs[0]), "--stand", str(stand)]) == 2
+    valid = "name, description, joint, drive, envelope, load, pendulum, friction, simulation, servo, bounds"
+    assert f"unknown key 'max_effort'; valid keys: {valid}" in capsys.readouterr().err

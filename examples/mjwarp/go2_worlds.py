@@ -30,16 +30,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nworld", type=int, default=8)
     parser.add_argument("--steps", type=int, default=600)
+    parser.add_argument("--model", type=Path, default=GO2, help=f"the Menagerie go2.xml (default {GO2})")
     args = parser.parse_args()
     import mujoco
     import mujoco_warp
     import warp as wp
 
-    if not GO2.is_file():
-        raise SystemExit(f"needs the Menagerie Go2 at {GO2}: get unitree_go2/go2.xml from mujoco_menagerie")
+    if not args.model.is_file():
+        raise SystemExit(
+            f"needs the Menagerie Go2 at {args.model}: get unitree_go2/go2.xml from mujoco_menagerie "
+            "and give it with --model"
+        )
     wp.config.quiet = True
     load_plugin()
-    spec = mujoco.MjSpec.from_file(str(GO2))
+    spec = mujoco.MjSpec.from_file(str(args.model))
     for joint in list(spec.body("base").joints):
         spec.delete(joint)
     for key in list(spec.keys):

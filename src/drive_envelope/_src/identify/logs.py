@@ -30,6 +30,7 @@ import json
 import math
 import os
 import zlib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,6 +74,9 @@ class BenchLog:
     """Measured actuator effort [N*m or N], or None."""
     duty_per_rad: float | None = None
     """Servo gain as PWM duty per radian from the sidecar (``kp_duty_per_rad``) [1/rad], or None."""
+    sidecar: Mapping[str, Any] | None = None
+    """The whole JSON sidecar, or None (its ``name``, ``mass_kg``, ``length_m`` are checked
+    against the log and the stand)."""
 
     @property
     def name(self) -> str:
@@ -109,6 +113,7 @@ def read_bench_log(path: str | os.PathLike[str]) -> BenchLog:
         columns = _read_parquet(file, label)
     else:
         columns = _read_csv(file, label)
+    sidecar = _sidecar(file)
     rows = columns["time"].shape[0]
     if rows < 3:
         raise InputError(f"{label}: {rows} data rows; expected at least 3 samples")
@@ -128,7 +133,8 @@ def read_bench_log(path: str | os.PathLike[str]) -> BenchLog:
         enabled=(enable != 0.0) if enable is not None else np.ones(rows, dtype=np.bool_),
         velocity=columns.get("velocity"),
         effort=columns.get("effort"),
-        duty_per_rad=_sidecar_duty(file),
+        duty_per_rad=None if sidecar is None else _sidecar_duty(sidecar, file),
+        sidecar=sidecar,
     )
 
 
@@ -288,7 +294,8 @@ def _check_grid(time: FloatArray, label: str) -> None:
         )
 
 
-def _sidecar_duty(file: Path) -> float | None:
+def _sidecar(file: Path) -> dict[str, Any] | None:
+    """The log's JSON sidecar (``NAME.json`` beside ``NAME.csv`` or ``NAME.csv.gz``), or None."""
     sidecar = (
         file.with_suffix(".json")
         if file.suffix.lower() != ".gz"
@@ -304,6 +311,12 @@ def _sidecar_duty(file: Path) -> float | None:
         ) from None
     if not isinstance(data, dict):
         raise InputError(f"{sidecar}: expected a JSON object (the log's sidecar)")
+    _sidecar_duty(data, sidecar)
+    return data
+
+
+def _sidecar_duty(data: dict[str, Any], sidecar: Path) -> float | None:
+    """The sidecar's ``kp_duty_per_rad`` [1/rad], or None; anything but a number > 0 is refused."""
     value = data.get("kp_duty_per_rad")
     if value is None:
         return None

@@ -5,7 +5,9 @@ The JSON object (``drive-envelope identify --json``), SI throughout:
 ``parameters``
     ``{name: {"value", "std", "fixed"}}`` for all eleven parameters: ``std`` is null for a fixed
     parameter and ``"inf"`` for a fitted one the logs do not identify (an envelope line that
-    never binds); an infinite value is ``"inf"``, as in envelope files.
+    never binds); an infinite value is ``"inf"``, as in envelope files. A parameter that follows
+    from others has a null value and ``"derived"`` saying how (stiffness with a servo duty gain:
+    ``"duty_per_rad * max_effort, per log"``).
 ``train`` / ``validation``
     ``{"mae_position": {log file name: rad}, "mae_position_mean": rad}`` (reference engine);
     ``mae_velocity`` likewise when the logs have a velocity column. ``validation`` has an empty
@@ -15,7 +17,8 @@ The JSON object (``drive-envelope identify --json``), SI throughout:
     reference engine).
 ``wall_time_s``, ``search``, ``envelope``, ``units``, ``notes``
     Time taken; generations, candidate replays and whether the polish helped; the identified
-    envelope; each parameter's unit; warnings (a parameter on a bound).
+    envelope; each parameter's unit; warnings (a parameter on a bound, a sidecar that disagrees
+    with its log or the stand).
 """
 
 from __future__ import annotations
@@ -63,9 +66,10 @@ def identification_to_dict(result: Identification) -> dict[str, Any]:
     data: dict[str, Any] = {
         "parameters": {
             name: {
-                "value": _number(estimate.value),
+                "value": None if estimate.derived else _number(estimate.value),
                 "std": None if estimate.fixed else _number(estimate.std),
                 "fixed": estimate.fixed,
+                **({"derived": estimate.derived} if estimate.derived else {}),
             }
             for name, estimate in result.parameters.items()
         },
@@ -107,6 +111,9 @@ def identification_text(result: Identification) -> str:
     units = parameter_units(result.scenario.joint.type)
     rows = []
     for name, estimate in result.parameters.items():
+        if estimate.derived:
+            rows.append([name, estimate.derived, "-", units[name].replace("**", "^")])
+            continue
         if estimate.fixed:
             std = "fixed"
         elif estimate.std is None or math.isinf(estimate.std):

@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -62,6 +63,8 @@ class Estimate:
     """Standard deviation [SI]; None for a fixed parameter, inf when the logs do not identify it."""
     fixed: bool
     """True when the stand's value was kept (not in ``--fit``)."""
+    derived: str = ""
+    """How the value follows from others instead (stiffness with a servo duty gain), else ``""``."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -169,6 +172,10 @@ def identify(
         )
         for name, value in values.items()
     }
+    if replay.uses_duty:  # stiffness is duty_per_rad * max_effort, per log: no single value
+        parameters["stiffness"] = Estimate(
+            value=math.nan, std=None, fixed=True, derived="duty_per_rad * max_effort, per log"
+        )
     return Identification(
         parameters=parameters,
         envelope=scenario.effective_envelope() or PerformanceEnvelope(max_effort=values["max_effort"]),
@@ -180,7 +187,7 @@ def identify(
         engine=engine,
         engine_train=engine_train,
         engine_validation=engine_validation,
-        notes=_bound_notes(space, values),
+        notes=_log_notes(setup, [*train_logs, *validation_logs]) + _bound_notes(space, values),
     )
 
 
@@ -292,6 +299,47 @@ def _load_mujoco_plugin() -> None:
     from drive_envelope._src.adapters.mujoco.loader import load_plugin
 
     load_plugin()
+
+
+_SIDECAR_TOLERANCE = 0.01  # relative difference of a sidecar's bench number from the stand's
+
+
+def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
+    """Warnings for sidecars that disagree with their log or the stand (a copied or stale file)."""
+    notes = []
+    pendulum = setup.scenario.pendulum
+    with_duty = [log for log in logs if log.duty_per_rad is not None]
+    for log in logs:
+        sidecar = log.sidecar or {}
+        stem = Path(log.path).name.split(".")[0]
+        named = sidecar.get("name")
+        if isinstance(named, str) and named != stem:
+            notes.append(
+                f"{log.path}: its sidecar names the log {named!r}: a sidecar copied from another log? "
+                "(its kp_duty_per_rad and bench numbers are used as they are)"
+            )
+        for key, stand_key in (("mass_kg", "mass"), ("length_m", "distance")):
+            value = sidecar.get(key)
+            if not isinstance(value, (int, float)) or isinstance(value, bool):
+                continue
+            if pendulum is None:
+                notes.append(
+                    f"{log.path}: its sidecar gives a pendulum ({key} = {value:g}) but {setup.source} "
+                    "has no [pendulum]: gravity on the load is not modelled"
+                )
+                break
+            expected = float(getattr(pendulum, stand_key))
+            if abs(float(value) - expected) > _SIDECAR_TOLERANCE * max(abs(expected), 1e-12):
+                notes.append(
+                    f"{log.path}: its sidecar gives {key} = {value:g} but {setup.source} has "
+                    f"pendulum.{stand_key} = {expected:g}"
+                )
+        if with_duty and log.duty_per_rad is None and setup.duty_per_rad is not None:
+            notes.append(
+                f"{log.path}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's "
+                f"servo.duty_per_rad = {setup.duty_per_rad:g}"
+            )
+    return tuple(notes)
 
 
 def _bound_notes(space: ParameterSpace, values: dict[str, float]) -> tuple[str, ...]:

@@ -89,7 +89,9 @@ def read_stand(
                 stacklevel=2,
             )
             data["simulation"] = {k: v for k, v in simulation.items() if k not in ("dt", "duration")}
-    scenario = scenario_from_mapping(data, source=source, base_dir=file.parent, default_name=file.stem)
+    scenario = scenario_from_mapping(
+        data, source=source, base_dir=file.parent, default_name=file.stem, other_tables=_OWN_TABLES
+    )
     return IdentifyStand(
         scenario=scenario,
         duty_per_rad=_duty(own["servo"], source),

@@ -30,7 +30,14 @@ from types import FrameType
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["TEMPORARY_PATTERN", "atomic_path", "atomic_write_bytes", "atomic_write_text", "write_target"]
+__all__ = [
+    "TEMPORARY_PATTERN",
+    "atomic_path",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "check_writable",
+    "write_target",
+]
 
 TEMPORARY_PATTERN = ".<name>.*.tmp<suffix>"
 """Name of the temporary file beside the target; only a SIGKILL mid-write can leave one."""
@@ -42,6 +49,16 @@ def write_target(path: str | os.PathLike[str]) -> Path:
     if target.is_symlink():
         return Path(os.path.realpath(target))
     return target
+
+
+def check_writable(path: str | os.PathLike[str], *, force: bool = False) -> None:
+    """Refuse now what :func:`atomic_path` would refuse at the end of a long run.
+
+    Raises:
+        InputError: the folder does not exist, the target is a folder, or it is read-only (without
+            ``force``).
+    """
+    _check_target(write_target(path), Path(path), force)
 
 
 def _check_target(target: Path, shown: Path, force: bool) -> None:

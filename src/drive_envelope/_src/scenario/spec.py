@@ -280,6 +280,7 @@ def scenario_from_mapping(
     source: str = "scenario",
     base_dir: str | os.PathLike[str] | None = None,
     default_name: str = "",
+    other_tables: tuple[str, ...] = (),
 ) -> Scenario:
     """Build a :class:`Scenario` from a raw mapping (the parsed file).
 
@@ -289,11 +290,13 @@ def scenario_from_mapping(
         source: File name used in error messages.
         base_dir: Directory against which a relative ``envelope.datasheet`` path is resolved.
         default_name: Scenario name when the mapping has no ``name``.
+        other_tables: Top-level tables the caller reads itself (identify's ``servo`` and
+            ``bounds``): valid here, and listed when an unknown key is refused, but not read.
 
     Raises:
         InputError: one line naming ``source``, the key, the value and what was expected.
     """
-    _check_keys(data, _TOP_KEYS, source, "")
+    _check_keys(data, (*_TOP_KEYS, *other_tables), source, "")
     if "joint" not in data:
         raise InputError(f"{source}: missing required table [joint] (type, inertia)")
     sections = {name: _table(data, name, source) for name in _SECTIONS}

@@ -144,8 +144,8 @@ def trajectory_format(path: str | os.PathLike[str], format: str | None = None) -
     suffix = Path(path).suffix.lower()
     if suffix not in _SUFFIXES:
         raise InputError(
-            f"--output {str(path)!r}: unknown suffix {suffix!r}; expected .csv, .json or .parquet "
-            "(or name the format with --format)"
+            f"--output {str(path)!r}: unknown suffix {suffix!r}; expected "
+            f"{', '.join(sorted(name for name in _SUFFIXES if name))} (or name the format with --format)"
         )
     return _SUFFIXES[suffix]
 

@@ -42,8 +42,15 @@ def register(subparsers: Any) -> None:
             "writes the identified envelope (-o) and a figure (--plot). Needs SciPy (the identify extra)."
         ),
     )
-    parser.add_argument("train", nargs="+", metavar="TRAIN_LOG", help="training logs (.csv, .parquet)")
-    parser.add_argument("--stand", required=True, metavar="STAND", help="stand file (scenario + [pendulum])")
+    parser.add_argument(
+        "train", nargs="+", metavar="TRAIN_LOG", help="training logs (.csv, .tsv, .txt, also .gz; .parquet)"
+    )
+    parser.add_argument(
+        "--stand",
+        required=True,
+        metavar="STAND",
+        help="stand file: a scenario (joint, drive, loads such as [pendulum]) plus [servo] and [bounds]",
+    )
     parser.add_argument(
         "--validate", nargs="+", default=[], metavar="LOG", help="held-out logs, replayed with the result"
     )
@@ -64,7 +71,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--plot", metavar="FIG", default=None, help="write the figure (.png, .svg or .pdf)")
     parser.add_argument(
         "--generations",
-        type=integer_at_least(0),
+        type=integer_at_least(1),
         default=60,
         metavar="N",
         help="most search generations (default 60)",
@@ -111,6 +118,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.identify.report import identification_text, identification_to_dict
     from drive_envelope._src.identify.run import identify
     from drive_envelope._src.identify.stand import StandWarning
+    from drive_envelope._src.io.atomic import check_writable
 
     output = checked_output(args.output)
     plot = checked_output(args.plot, "--plot")
@@ -119,7 +127,10 @@ def _run(args: argparse.Namespace) -> int:
     if plot is not None:
         from drive_envelope._src.plots.figure import check_figure_path
 
-        check_figure_path(plot, "--plot")  # before the search, which takes a while
+        check_figure_path(plot, "--plot")
+    for path in (output, plot):  # before the search, which takes a while: never lose its result
+        if path is not None:
+            check_writable(path, force=args.force)
     options = SearchOptions(
         generations=args.generations,
         population=args.population,

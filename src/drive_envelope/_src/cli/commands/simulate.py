@@ -77,6 +77,10 @@ def _run(args: argparse.Namespace) -> int:
     to_stdout = args.output in (None, "-")
     output = None if to_stdout else checked_output(args.output)
     chosen = _output_format(args.format, output)  # before the run: a bad output wastes no simulation
+    if output is not None:
+        from drive_envelope._src.io.atomic import check_writable
+
+        check_writable(output, force=args.force)
     scenario = load_scenario(args.file, args.overrides)
     try:
         steps = check_steps(scenario, args.max_steps)
