@@ -209,7 +209,7 @@ def test_import_is_light() -> None:
 
 
 def test_implicit_entry_point_is_the_shared_effort_clamp() -> None:
-    """Evaluate evaluate_clamp in float64 with the shared clamp_effort_func: the core's numbers, NaN kept."""
+    """Evaluate evaluate_clamp in float64 with the shared clamp_effort_func: the core's numbers, NaN -> 0."""
     import warp as wp
 
     from drive_envelope.newton import ClampingPerformanceEnvelope
@@ -246,3 +246,4 @@ def test_implicit_entry_point_is_the_shared_effort_clamp() -> None:
     inputs = [wp.array(value, dtype=wp.float64, device="cpu"), wp.array(qd, dtype=wp.float64, device="cpu")]
     wp.launch(entry_point, dim=len(value), inputs=[*inputs, params], outputs=[out], device="cpu")
     np.testing.assert_array_equal(out.numpy(), de.clamp_effort(env, value, qd))
+    assert out.numpy()[-2:].tolist() == [0.0, 0.0]  # a NaN effort or velocity lets the drive go

@@ -128,8 +128,8 @@ def test_effort_ops_match_reference(device: str, case: dict[str, float]) -> None
     np.testing.assert_allclose(implicit, expected, rtol=1e-4, atol=10 * atol)
 
 
-def test_explicit_clamp_propagates_nan() -> None:
-    """Turn a NaN effort or velocity into NaN, as the reference does."""
+def test_explicit_clamp_lets_go_on_nan() -> None:
+    """Turn a NaN effort or velocity into 0 (the drive lets go), as the reference does (was: NaN)."""
     import drive_envelope.torch as dt
 
     env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
@@ -138,6 +138,7 @@ def test_explicit_clamp_propagates_nan() -> None:
     params = dt.EnvelopeTensors.from_envelopes(env, dtype=np.float64)
     result = dt.clamp_effort(params, effort, velocity)
     assert _same(result, de.clamp_effort(env, effort, velocity))
+    assert result.tolist() == [0.0, 0.0, 2.0, 0.0]
 
 
 def test_explicit_ops_broadcast_scalars_and_arrays() -> None:

@@ -124,15 +124,17 @@ def test_effort_kernels_match_reference(device: str, case: dict[str, float]) -> 
     np.testing.assert_allclose(implicit, expected, rtol=1e-4, atol=1e-4 * max(env.max_effort, 1.0))
 
 
-def test_explicit_clamp_propagates_nan() -> None:
-    """Turn a NaN effort or velocity into NaN, as the reference does, never into a number."""
+def test_explicit_clamp_lets_go_on_nan() -> None:
+    """Turn a NaN effort or velocity into 0 (the drive lets go), as the reference does (was: NaN)."""
     import drive_envelope.warp as dw
 
     env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
     effort = np.array([np.nan, 1.0, 5.0], dtype=np.float32)
     velocity = np.array([0.0, np.nan, 1.0], dtype=np.float32)
     params = dw.EnvelopeArrays.from_envelopes(env, count=3, device="cpu")
-    assert _same(dw.clamp_effort(params, effort, velocity).numpy(), de.clamp_effort(env, effort, velocity))
+    result = dw.clamp_effort(params, effort, velocity).numpy()
+    assert _same(result, de.clamp_effort(env, effort, velocity))
+    assert result.tolist() == [0.0, 0.0, 2.0]
 
 
 def test_funcs_work_inside_user_kernels() -> None:

@@ -57,12 +57,14 @@ under a mask that flips at random costs ten integer passes.
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 
 __all__ = [
     "CLAMP_DRIVE_IMPULSE_ARGS",
@@ -96,7 +98,10 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
     """Limit ``effort`` to the envelope at the given (current) velocity: the explicit clamp.
 
     This is what a plain actuator model does each control step: the effort keeps its sign and its
-    magnitude is capped at :meth:`PerformanceEnvelope.effort_limit` of ``velocity``.
+    magnitude is capped at :meth:`PerformanceEnvelope.effort_limit` of ``velocity``. NaN and
+    infinity follow the rule of every backend (``docs/kernels.md``): a NaN effort or velocity
+    gives 0 (the drive lets go, as the implicit clamp does), an infinite effort the limit, an
+    infinite velocity the limit at infinite speed.
 
     Args:
         envelope: The envelope (joint side, SI).
@@ -104,12 +109,26 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
         velocity: Current joint velocity [rad/s or m/s].
 
     Returns:
-        Clamped effort [N*m or N], float64, broadcast shape.
+        Clamped effort [N*m or N], float64, broadcast shape; never NaN.
     """
-    limit = envelope.effort_limit(velocity)
+    limit = envelope.effort_limit(velocity)  # >= 0, never NaN
     effort = np.asarray(effort, dtype=np.float64)
     clamped = np.minimum(effort, limit, out=np.empty(np.broadcast_shapes(effort.shape, limit.shape)))
-    return np.maximum(clamped, np.negative(limit, out=limit), out=clamped)
+    np.maximum(clamped, np.negative(limit, out=limit), out=clamped)
+    if np.isnan(np.min(clamped, initial=0.0)):  # a NaN effort (one read pass finds it): let go
+        clamped[np.isnan(clamped)] = 0.0
+    return clamped
+
+
+def _check_step(dt: object) -> float:
+    """``dt`` as a float, refused unless a finite time step ``> 0`` [s]."""
+    if (
+        isinstance(dt, bool)
+        or not isinstance(dt, (int, float, np.integer, np.floating))
+        or not 0.0 < float(dt) < math.inf
+    ):
+        raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
+    return float(dt)
 
 
 def clamp_effort_implicit(
@@ -125,35 +144,43 @@ def clamp_effort_implicit(
     The result ``e`` is the clamped TOTAL actuator effort such that ``e`` and the post-step velocity
     ``velocity + response*dt*(e - applied_effort)`` satisfy both envelope curves; it keeps the sign
     of the request, never exceeds it in magnitude nor ``max_effort``, and is 0 when even zero effort
-    is infeasible. It is :func:`clamp_drive_impulse` (default mode, the cap kept) on ``effort*dt``.
+    is infeasible or an input is NaN. It is :func:`clamp_drive_impulse` (default mode, the cap kept)
+    on ``effort*dt``.
 
     Args:
         envelope: The envelope (joint side, SI).
         requested_effort: Requested total actuator effort for the step [N*m or N].
         velocity: Joint velocity that already contains ``applied_effort`` [rad/s or m/s].
         response: Joint velocity change per unit joint impulse, ``1/inertia`` for one DOF
-            [rad/s/(N*m*s) or m/s/(N*s)].
-        dt: Time step [s], ``> 0``.
+            [rad/s/(N*m*s) or m/s/(N*s)], ``>= 0`` (a NaN lets the drive go).
+        dt: Time step [s], ``> 0`` and finite.
         applied_effort: Total actuator effort already applied this step [N*m or N].
 
     Returns:
         Clamped total effort [N*m or N], float64, broadcast shape.
+
+    Raises:
+        InputError: ``dt`` not a finite number ``> 0``, or a negative ``response``.
     """
-    if not dt > 0.0:
-        raise ValueError(f"dt must be > 0, got {dt!r}")
+    step = _check_step(dt)
+    r = np.asarray(response, dtype=np.float64)
+    negative = r < 0.0  # a NaN response is not refused: it lets the drive go, as any NaN does
+    if negative.any():
+        bad = float(r[negative].flat[0])
+        raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
     requested = np.asarray(requested_effort, dtype=np.float64)
     impulse = clamp_drive_impulse(
         velocity,
-        np.asarray(applied_effort, dtype=np.float64) * dt,
-        requested * dt,
-        response,
+        np.asarray(applied_effort, dtype=np.float64) * step,
+        requested * step,
+        r,
         envelope.max_actuator_velocity,
-        envelope.max_effort * dt,
-        envelope.speed_effort_gradient / dt,
-        envelope.velocity_dependent_resistance * dt,
+        envelope.max_effort * step,
+        envelope.speed_effort_gradient / step,
+        envelope.velocity_dependent_resistance * step,
     )
     # (x*dt)/dt can round one ulp above x or max_effort: the clamp grows neither, nor may we
-    magnitude = np.fmin(np.abs(impulse / dt), np.abs(requested))  # fmin: a NaN request gives 0
+    magnitude = np.fmin(np.abs(impulse / step), np.abs(requested))  # fmin: a NaN request gives 0
     return np.copysign(np.minimum(magnitude, envelope.max_effort), impulse)
 
 

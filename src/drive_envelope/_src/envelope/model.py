@@ -114,25 +114,37 @@ class PerformanceEnvelope:
         Returns:
             ``min(max_effort - R*|v|, (v_max - |v|)/G)`` clipped at 0 [N*m or N]; the ``(v_max-|v|)/G``
             term is dropped when ``G = 0`` and then ``|v| > v_max`` gives 0. 0 means no effort is
-            feasible at that speed.
+            feasible at that speed. A NaN velocity gives 0 (the drive lets go); an infinite one the
+            limit at infinite speed: 0 when ``R > 0`` or ``v_max`` is finite, else ``max_effort``.
         """
         speed = np.array(velocity, dtype=np.float64)  # a copy, 0-d for a scalar
         return self._effort_limit_of_speed(np.abs(speed, out=speed))
 
     def _effort_limit_of_speed(self, speed: FloatArray) -> FloatArray:
-        """:meth:`effort_limit` of ``speed = |velocity|``, reusing ``speed``'s memory (hot path)."""
-        with np.errstate(over="ignore"):  # R*|v| beyond float range: -inf, then no effort (0)
-            limit = np.multiply(speed, -self.velocity_dependent_resistance, out=np.empty_like(speed))
-        limit += self.max_effort
-        if self.speed_effort_gradient > 0.0:
-            eq2 = np.subtract(self.max_actuator_velocity, speed, out=speed)
-            with np.errstate(over="ignore"):  # a subnormal gradient: no effort limit from eq. 2 (inf)
-                eq2 /= self.speed_effort_gradient  # not *= 1/G: 0 * inf would be NaN at |v| = v_max
-            np.minimum(limit, eq2, out=limit)
-        elif math.isfinite(self.max_actuator_velocity):
-            limit[speed > self.max_actuator_velocity] = 0.0
-        np.maximum(limit, 0.0, out=limit)
-        return limit
+        """:meth:`effort_limit` of ``speed = |velocity|``, reusing ``speed``'s memory (hot path).
+
+        The parameters are scalars here, so each term is formed only where it can bind: no ``0*inf``
+        (``R = 0`` at an infinite speed) and no ``inf - inf`` (``v_max = inf``), hence no NaN but
+        the one a NaN speed carries, which the final ``fmax`` turns into 0.
+        """
+        resistance, gradient = self.velocity_dependent_resistance, self.speed_effort_gradient
+        if resistance > 0.0:
+            with np.errstate(over="ignore"):  # R*|v| beyond float range: -inf, then no effort (0)
+                limit = np.multiply(speed, -resistance, out=np.empty_like(speed))
+            limit += self.max_effort
+        else:
+            limit = np.full_like(speed, self.max_effort)
+            if not math.isfinite(self.max_actuator_velocity):  # no line binds: only a NaN shows
+                limit[np.isnan(speed)] = 0.0
+        if math.isfinite(self.max_actuator_velocity):
+            if gradient > 0.0:
+                eq2 = np.subtract(self.max_actuator_velocity, speed, out=speed)
+                with np.errstate(over="ignore"):  # a subnormal gradient: no effort limit from eq. 2
+                    eq2 /= gradient  # not *= 1/G: 0 * inf would be NaN at |v| = v_max
+                np.minimum(limit, eq2, out=limit)
+            else:  # beyond the speed limit (or NaN): nothing
+                limit[~(speed <= self.max_actuator_velocity)] = 0.0
+        return np.fmax(limit, 0.0, out=limit)  # fmax: a NaN speed gives 0
 
     def velocity_limit(self, effort: ArrayLike) -> FloatArray:
         """Largest |velocity| the envelope allows while the drive exerts ``effort`` (eq. 1 and eq. 2).

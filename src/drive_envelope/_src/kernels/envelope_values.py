@@ -69,12 +69,12 @@ def envelope_columns(
 
     Args:
         envelopes: One envelope per DOF, or a single envelope.
-        count: Number of DOFs for a single envelope (``None``: a 0-d column each).
+        count: Number of DOFs for a single envelope, ``>= 0`` (``None``: a 0-d column each).
         where: The caller, for errors.
     """
     if isinstance(envelopes, PerformanceEnvelope):
-        if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
-            raise InputError(f"{where}: count: expected a number of DOFs >= 1, got {count!r}")
+        if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 0):
+            raise InputError(f"{where}: count: expected a number of DOFs >= 0, got {count!r}")
         return {
             name: np.full(() if count is None else (count,), getattr(envelopes, name), dtype=np.float64)
             for name in ENVELOPE_FIELDS

@@ -3,7 +3,8 @@
 Values are validated on the host when built from envelopes or values; the constructor itself only
 checks that the four are float tensors of one dtype and one device whose shapes broadcast (a
 ``(num_envs, num_joints)`` layout, a ``(1, num_joints)`` row, a ``(N,)`` column or 0-d scalars).
-torch is imported on first use.
+torch is imported on first use. The checks of the states the ops get live here too: a tensor must
+have the parameters' dtype, shapes must broadcast; both read ``.dtype`` and ``.shape`` only.
 """
 
 from __future__ import annotations
@@ -22,7 +23,14 @@ from drive_envelope._src.kernels.envelope_values import envelope_columns, read_e
 if TYPE_CHECKING:
     import torch
 
-__all__ = ["EnvelopeTensors", "resolve_dtype"]
+__all__ = [
+    "EnvelopeTensors",
+    "broadcast_states",
+    "check_params",
+    "records_grad",
+    "resolve_dtype",
+    "state_tensors",
+]
 
 
 def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
@@ -140,9 +148,10 @@ class EnvelopeTensors:
         Args:
             envelopes: One envelope per DOF (tensors of shape ``(N,)``), or a single envelope: 0-d
                 tensors that broadcast against any state, or ``(count,)`` when ``count`` is given.
-            count: Number of DOFs for a single envelope.
+            count: Number of DOFs for a single envelope, ``>= 0`` (0: an empty batch).
             device: Torch device.
-            dtype: Float dtype (torch or NumPy; default float32).
+            dtype: Float dtype (torch or NumPy; default float32): the ops compute in it, return it
+                and refuse state tensors of any other dtype.
         """
         return cls._build(envelope_columns(envelopes, count, "EnvelopeTensors.from_envelopes"), device, dtype)
 
@@ -196,3 +205,67 @@ class EnvelopeTensors:
         kind = resolve_dtype(dtype)
         target = torch.device(device)
         return cls(**{n: torch.as_tensor(np.array(a), dtype=kind, device=target) for n, a in values.items()})
+
+
+# -- the states the ops get: their dtype and shapes, checked on .dtype and .shape only ---------------
+
+
+def check_params(params: object) -> EnvelopeTensors:
+    """``params`` if it is an :class:`EnvelopeTensors`, else an InputError naming its type."""
+    if not isinstance(params, EnvelopeTensors):
+        raise InputError(f"params: expected an EnvelopeTensors, got {type(params).__name__}")
+    return params
+
+
+def _dtype_error(name: str, got: torch.dtype, kind: torch.dtype) -> InputError:
+    if got.is_floating_point:
+        return InputError(
+            f"{name}: a {got} tensor, but the envelope tensors are {kind}; pass {kind} or build "
+            f"EnvelopeTensors with dtype={got}"
+        )
+    return InputError(f"{name}: expected a floating {kind} tensor (the envelope tensors' dtype), got {got}")
+
+
+def state_tensors(params: EnvelopeTensors, **values: object) -> list[torch.Tensor]:
+    """The states as tensors of the parameters' dtype on their device.
+
+    The dtype rule of the effort-level ops: a tensor must have the parameters' dtype (any other is
+    refused, so that no precision and no gradient is lost in a silent cast); a number, list or
+    NumPy array is read in that dtype, as Warp reads host values in float32. Only ``.dtype`` is
+    read (no sync).
+    """
+    import torch
+
+    kind, device = params.dtype, params.device
+    tensors = []
+    for name, value in values.items():
+        if isinstance(value, torch.Tensor):
+            if value.dtype != kind:
+                raise _dtype_error(name, value.dtype, kind)
+            tensors.append(value if value.device == device else value.to(device))
+        else:
+            tensors.append(torch.as_tensor(value, dtype=kind, device=device))
+    return tensors
+
+
+def broadcast_states(where: str, params: EnvelopeTensors, **states: torch.Tensor) -> list[torch.Tensor]:
+    """``torch.broadcast_tensors(*states, *params)`` (views); shapes that do not broadcast: InputError."""
+    import torch
+
+    try:
+        return list(torch.broadcast_tensors(*states.values(), *params.as_tuple()))
+    except RuntimeError:
+        shapes = ", ".join(f"{n}={tuple(t.shape)}" for n, t in states.items())
+        raise InputError(
+            f"{where}: shapes do not broadcast (params={params.shape}, {shapes}); expected shapes that "
+            "broadcast together"
+        ) from None
+
+
+def records_grad(params: EnvelopeTensors, *states: torch.Tensor) -> bool:
+    """Whether autograd records this call (a state or a parameter requires grad, grad mode on)."""
+    import torch
+
+    if not torch.is_grad_enabled():
+        return False
+    return any(t.requires_grad for t in states) or any(t.requires_grad for t in params.as_tuple())

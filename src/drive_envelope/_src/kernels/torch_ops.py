@@ -1,8 +1,9 @@
 """The envelope on PyTorch tensors: batched, device-agnostic, no Python loops over DOFs.
 
 Every function imports ``torch`` on call. The effort-level ops take an :class:`EnvelopeTensors`
-first and compute in its dtype on its device; states may be tensors, NumPy arrays or scalars that
-broadcast with it (e.g. ``(num_envs, num_joints)``). :func:`clamp_drive_impulse` has the core's
+first and compute in its dtype on its device, and return that dtype; states may be tensors of that
+dtype (another is refused, not cast), NumPy arrays or scalars (read in it) that broadcast with it
+(e.g. ``(num_envs, num_joints)``). :func:`clamp_drive_impulse` has the core's
 signature; its inputs land on the device of the first tensor given (the CPU when there is none).
 
 :func:`clamp_drive_impulse` is the same port as the NumPy core (``envelope/clamp.py``): PhysX's
@@ -25,7 +26,14 @@ import numpy as np
 
 from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors, resolve_dtype
+from drive_envelope._src.kernels.torch_envelope import (
+    EnvelopeTensors,
+    broadcast_states,
+    check_params,
+    records_grad,
+    resolve_dtype,
+    state_tensors,
+)
 
 if TYPE_CHECKING:
     import torch
@@ -57,17 +65,13 @@ def _tensors(values: tuple[object, ...], dtype: Any) -> list[torch.Tensor]:
     return [torch.as_tensor(v, dtype=kind, device=device) for v in values]
 
 
-def _params(params: object) -> EnvelopeTensors:
-    if not isinstance(params, EnvelopeTensors):
-        raise InputError(f"params: expected an EnvelopeTensors, got {type(params).__name__}")
-    return params
-
-
-def _states(params: EnvelopeTensors, *values: object) -> list[torch.Tensor]:
-    """The states in the parameters' dtype and on their device."""
+@functools.cache
+def _zero(dtype: torch.dtype, device: torch.device) -> torch.Tensor:
+    """A 0-d zero of ``dtype`` on ``device``, made once (a clamp bound without a per-call allocation)."""
     import torch
 
-    return [torch.as_tensor(v, dtype=params.dtype, device=params.device) for v in values]
+    with torch.inference_mode(False):
+        return torch.zeros((), dtype=dtype, device=device)
 
 
 def _pmax(a: torch.Tensor | float, b: torch.Tensor) -> torch.Tensor:
@@ -321,48 +325,128 @@ def fused_clamp_drive_impulse(
     return _compiled_port()(*tensors, exact=bool(physx_exact))
 
 
-def effort_limit(params: EnvelopeTensors, velocity: Any) -> torch.Tensor:
-    """Largest |effort| at ``velocity``: ``min(max_effort - R|v|, (v_max - |v|)/G)`` clipped at 0.
+def _limit_buffers(
+    v: torch.Tensor,
+    max_e: torch.Tensor,
+    max_v: torch.Tensor,
+    resist: torch.Tensor,
+    grad: torch.Tensor,
+    *,
+    vectorized: bool | None = None,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(L, spare)``: the limit in ``[0, max_effort]`` or NaN (where ``v`` is, or it is 0), a free buffer.
 
-    ``G = 0`` drops the second term and gives 0 where ``|v| > v_max`` (the division by zero gives
-    ``-inf`` there and ``fmin`` skips the ``0/0`` NaN at ``|v| = v_max``), as the reference does.
-
-    Args:
-        params: The envelope parameters (their dtype and device are the computation's).
-        velocity: Joint velocity [rad/s or m/s], broadcast with the parameters.
-
-    Returns:
-        The limit [N*m or N], broadcast shape.
+    All arguments have one (broadcast) shape; both results are fresh buffers of it (no autograd).
+    The terms ``max_effort - R*|v|`` and ``(v_max - |v|)/G`` are NaN where they do not bind: ``R = 0``
+    at an infinite speed (``0*inf``), ``v_max = inf`` there (``inf - inf``), ``G = 0`` at
+    ``|v| = v_max`` (``0/0``); the smaller of the others is the limit, so an infinite velocity gives
+    the limit at infinite speed. Two ways to the same numbers: ``vectorized`` (the default on the
+    CPU, where ``torch.fmin`` is a scalar loop, 12x ``torch.minimum``) turns a NaN term into
+    ``+inf`` and carries the NaN velocity alone in ``clamp_max(|v|, 0)`` (0, or NaN where ``v`` is),
+    with two kernels more; else ``torch.fmin`` drops a NaN term and the speed line sees the largest
+    finite speed instead of an infinite one (7 kernels, one more than before the NaN rule).
     """
     import torch
 
-    params = _params(params)
-    v, max_e, max_v, resist, grad = torch.broadcast_tensors(*_states(params, velocity), *params.as_tuple())
-    speed = v.abs()  # a fresh full-size buffer: the in-place ops below reuse it
+    if vectorized is None:
+        vectorized = v.device.type == "cpu"
+    speed = v.abs()  # fresh full-size buffers, reused in place: at RL scale these ops are memory-bound
     limit = torch.addcmul(max_e, resist, speed, value=-1.0)
-    # in place where possible: at RL scale these ops are memory-bound and allocations cost as much
-    speed_line = torch.sub(max_v, speed, out=speed).div_(grad)
-    return torch.fmin(limit, speed_line, out=limit).clamp_min_(0.0)
+    if vectorized:
+        floor = speed.clamp_max(0.0)
+        line = torch.sub(max_v, speed, out=speed).div_(grad)
+        for term in (limit, line):
+            term.nan_to_num_(nan=math.inf, posinf=math.inf, neginf=-math.inf)
+        torch.minimum(limit, line, out=limit)
+        return torch.clamp(limit, floor, max_e, out=limit), speed
+    speed.clamp_max_(torch.finfo(v.dtype).max)
+    line = torch.sub(max_v, speed, out=speed).div_(grad)
+    torch.fmin(limit, line, out=limit)  # NaN only where both terms are: a NaN velocity
+    return torch.clamp(limit, _zero(v.dtype, v.device), max_e, out=limit), speed
+
+
+def _limit_tracked(
+    v: torch.Tensor, max_e: torch.Tensor, max_v: torch.Tensor, resist: torch.Tensor, grad: torch.Tensor
+) -> torch.Tensor:
+    """:func:`_limit_buffers`'s ``L``, the same numbers, out of place and with finite gradients.
+
+    Each term is differentiated only where it binds at a finite velocity; beyond ``v_max`` with
+    ``G = 0`` and at a NaN or infinite velocity the limit is a constant (the numbers of
+    :func:`_limit_buffers`), so no ``0 * inf`` or NaN reaches a gradient.
+    """
+    import torch
+
+    with torch.no_grad():
+        plain, _ = _limit_buffers(*torch.broadcast_tensors(v, max_e, max_v, resist, grad))
+    finite = torch.isfinite(v)
+    speed = torch.where(finite, v, 0.0).abs()
+    limit = torch.addcmul(max_e, resist, speed, value=-1.0)
+    live = (grad > 0.0) & (max_v < math.inf)  # the speed line, where it can bind
+    line = (torch.where(live, max_v, 0.0) - speed) / torch.where(live, grad, 1.0)
+    limit = torch.where(live, torch.fmin(limit, line), limit).clamp_min(0.0)
+    over = (grad == 0.0) & (speed > max_v)  # no gradient beyond the speed limit
+    return torch.where(finite & ~over, limit, plain)
+
+
+def effort_limit(params: EnvelopeTensors, velocity: Any) -> torch.Tensor:
+    """Largest |effort| at ``velocity``: ``min(max_effort - R|v|, (v_max - |v|)/G)`` clipped at 0.
+
+    ``G = 0`` drops the second term and gives 0 where ``|v| > v_max``, as the reference does. A NaN
+    velocity gives 0; an infinite one the limit at infinite speed (0 when ``R > 0`` or ``v_max`` is
+    finite, else ``max_effort``). Autograd works through it.
+
+    Args:
+        params: The envelope parameters (their dtype and device are the computation's).
+        velocity: Joint velocity [rad/s or m/s], broadcast with the parameters; a tensor must have
+            the parameters' dtype.
+
+    Returns:
+        The limit [N*m or N], broadcast shape, the parameters' dtype.
+    """
+    import torch
+
+    params = check_params(params)
+    (v,) = state_tensors(params, velocity=velocity)
+    views = broadcast_states("effort_limit", params, velocity=v)
+    if records_grad(params, v):
+        return torch.nan_to_num(_limit_tracked(v, *params.as_tuple()), nan=0.0, posinf=math.inf)
+    limit, _ = _limit_buffers(*views)
+    return limit.nan_to_num_(nan=0.0, posinf=math.inf, neginf=-math.inf)
 
 
 def clamp_effort(params: EnvelopeTensors, effort: Any, velocity: Any) -> torch.Tensor:
     """Explicit clamp: ``clip(effort, -L(v), L(v))`` with :func:`effort_limit` at the current velocity.
 
+    A NaN effort or velocity gives 0 (the drive lets go), an infinite effort +-L(v), an infinite
+    velocity the limit at infinite speed: the rule of every backend. Autograd works through it:
+    d(result)/d(effort) is 1 inside ``[-L, L]``, 0 where clipped (1/2 on the bound itself, as
+    ``torch.clamp`` has it) and 0 at a NaN, and the gradients are finite wherever the velocity is.
+    When no tensor requires grad (or under ``torch.no_grad``/``inference_mode``) it runs in place on
+    fresh buffers, without host syncs.
+
     Args:
         params: The envelope parameters.
-        effort: Requested effort [N*m or N].
-        velocity: Current joint velocity [rad/s or m/s].
+        effort: Requested effort [N*m or N]; a tensor must have the parameters' dtype.
+        velocity: Current joint velocity [rad/s or m/s]; the same.
 
     Returns:
-        Clamped effort [N*m or N], broadcast shape (NaN stays NaN, like ``numpy.clip``).
+        Clamped effort [N*m or N], broadcast shape, the parameters' dtype; never NaN.
+
+    Raises:
+        InputError: ``params`` not an :class:`EnvelopeTensors`, a tensor of another dtype, or
+            shapes that do not broadcast.
     """
     import torch
 
-    params = _params(params)
-    limit = effort_limit(params, velocity)
-    (tau,) = _states(params, effort)
-    clamped = torch.minimum(tau, limit)  # minimum/maximum propagate NaN, like numpy.clip
-    return torch.maximum(clamped, limit.neg_(), out=clamped)  # limit is a fresh buffer
+    params = check_params(params)
+    tau, v = state_tensors(params, effort=effort, velocity=velocity)
+    tau_b, *views = broadcast_states("clamp_effort", params, effort=tau, velocity=v)
+    if records_grad(params, tau, v):
+        limit = _limit_tracked(v, *params.as_tuple())
+        return torch.nan_to_num(torch.clamp(tau, -limit, limit), nan=0.0, posinf=math.inf, neginf=-math.inf)
+    limit, spare = _limit_buffers(*views)
+    clamped = torch.clamp(tau_b, torch.neg(limit, out=spare), limit, out=limit)  # NaN: effort or L
+    return clamped.nan_to_num_(nan=0.0, posinf=math.inf, neginf=-math.inf)  # a NaN: the drive lets go
 
 
 def clamp_effort_implicit(
@@ -381,24 +465,45 @@ def clamp_effort_implicit(
         params: The envelope parameters.
         requested_effort: Requested total actuator effort [N*m or N].
         velocity: Joint velocity that already contains ``applied_effort`` [rad/s or m/s].
-        response: Joint velocity change per unit joint impulse [rad/s/(N*m*s) or m/s/(N*s)].
+        response: Joint velocity change per unit joint impulse [rad/s/(N*m*s) or m/s/(N*s)],
+            ``>= 0``: a negative number or NumPy array is refused; a tensor is not read (that would
+            sync with the device), a negative value in it gives the guarded result, as in Warp.
         dt: Time step [s], ``> 0``.
         applied_effort: Total actuator effort already applied this step [N*m or N].
 
+    Tensors must have the parameters' dtype (see :func:`clamp_effort`).
+
     Returns:
-        Clamped total effort [N*m or N], broadcast shape.
+        Clamped total effort [N*m or N], broadcast shape, the parameters' dtype.
+
+    Raises:
+        InputError: a bad ``dt``, ``params``, dtype or shape, or a negative ``response`` on the host.
     """
     import torch
 
-    params = _params(params)
+    params = check_params(params)
     if (
         isinstance(dt, bool)
         or not isinstance(dt, (int, float, np.floating))
         or not 0.0 < float(dt) < math.inf
     ):
         raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
+    if not isinstance(response, torch.Tensor):
+        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
+        if negative.any():
+            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
+            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
     step = float(dt)
-    tau, v, r, applied = _states(params, requested_effort, velocity, response, applied_effort)
+    tau, v, r, applied = state_tensors(
+        params,
+        requested_effort=requested_effort,
+        velocity=velocity,
+        response=response,
+        applied_effort=applied_effort,
+    )
+    broadcast_states(
+        "clamp_effort_implicit", params, requested_effort=tau, velocity=v, response=r, applied_effort=applied
+    )
     max_e, max_v, resist, grad = params.as_tuple()
     impulse = clamp_drive_impulse(
         v, applied * step, tau * step, r, max_v, max_e * step, grad / step, resist * step

@@ -76,10 +76,17 @@ def effort_limit_func(
     """Largest |effort| [N*m or N] the envelope allows at ``velocity`` [rad/s or m/s].
 
     limit = max(min(max_effort - R*|v|, (v_max - |v|)/G), 0); with G = 0 the second term is
-    replaced by the test |v| > v_max -> 0. A NaN velocity gives NaN.
+    replaced by the test |v| > v_max -> 0. A NaN velocity gives 0; an infinite one the limit at
+    infinite speed: 0 when R > 0 or v_max is finite, else max_effort (no 0*inf, no inf - inf).
     """
     zero = type(velocity)(0.0)
+    if velocity != velocity:  # NaN: the drive lets go
+        return zero
     speed = wp.abs(velocity)
+    if speed - speed != zero:  # infinite (x - x is NaN only for inf here; isinf is a call on the CPU)
+        if velocity_dependent_resistance > zero or max_actuator_velocity - max_actuator_velocity == zero:
+            return zero
+        return max_effort
     limit = max_effort - velocity_dependent_resistance * speed
     if speed_effort_gradient > zero:
         limit = _min_nan(limit, (max_actuator_velocity - speed) / speed_effort_gradient)
@@ -97,10 +104,16 @@ def clamp_effort_func(
     effort: Any,
     velocity: Any,
 ):
-    """Explicit clamp: ``clip(effort, -L(v), L(v))`` [N*m or N] at the current velocity v (NaN stays NaN)."""
+    """Explicit clamp: ``clip(effort, -L(v), L(v))`` [N*m or N] at the current velocity v.
+
+    A NaN effort or velocity gives 0 (the drive lets go), an infinite effort +-L(v), an infinite
+    velocity the limit at infinite speed (:func:`effort_limit_func`): never NaN.
+    """
     limit = effort_limit_func(
         max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient, velocity
     )
+    if effort != effort:
+        return type(limit)(0.0)
     return _min_nan(_max_nan(effort, type(limit)(-1.0) * limit), limit)
 
 

@@ -103,11 +103,12 @@ class EnvelopeArrays:
 
         Args:
             envelopes: One envelope per DOF, or a single envelope repeated ``count`` times.
-            count: Number of DOFs when ``envelopes`` is a single envelope (required then).
+            count: Number of DOFs when ``envelopes`` is a single envelope (required then; 0 gives
+                empty arrays, and every launch on them returns an empty result).
             device: Warp device (default: Warp's current device).
         """
         if isinstance(envelopes, PerformanceEnvelope) and count is None:
-            raise InputError("EnvelopeArrays.from_envelopes: count: expected a number of DOFs >= 1, got None")
+            raise InputError("EnvelopeArrays.from_envelopes: count: expected a number of DOFs >= 0, got None")
         return cls._upload(envelope_columns(envelopes, count, "EnvelopeArrays.from_envelopes"), device)
 
     @classmethod
@@ -131,14 +132,16 @@ class EnvelopeArrays:
             max_actuator_velocity: [rad/s or m/s], ``>= 0`` (``inf`` allowed).
             velocity_dependent_resistance: [N*m*s/rad or N*s/m], ``>= 0``, finite.
             speed_effort_gradient: [(rad/s)/(N*m) or (m/s)/N], ``>= 0``, finite.
-            count: Number of DOFs when every value is a scalar.
+            count: Number of DOFs when every value is a scalar (``>= 0``).
             device: Warp device (default: Warp's current device).
 
         Raises:
             InputError: a negative, NaN or (except ``max_actuator_velocity``) infinite value, a
-                wrong unit, or shapes that do not broadcast to ``(N,)``.
+                wrong unit, a bad ``count``, or shapes that do not broadcast to ``(N,)``.
         """
         where = "EnvelopeArrays.from_values"
+        if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 0):
+            raise InputError(f"{where}: count: expected a number of DOFs >= 0, got {count!r}")
         raw = read_envelope_values(
             {
                 "max_effort": max_effort,
@@ -149,7 +152,7 @@ class EnvelopeArrays:
             where,
         )
         try:
-            shape = np.broadcast_shapes(*(a.shape for a in raw.values()), (count,) if count else ())
+            shape = np.broadcast_shapes(*(a.shape for a in raw.values()), () if count is None else (count,))
         except ValueError:
             shapes = ", ".join(f"{n}={a.shape}" for n, a in raw.items())
             raise InputError(f"{where}: shapes do not broadcast ({shapes})") from None
@@ -196,6 +199,22 @@ def _output(out: Any, count: int, device: Any) -> Any:
     return _as_array(out, count, device, "out")
 
 
+def _launch(kernel: Any, n: int, inputs: list[Any], result: Any, device: Any) -> None:
+    """Launch ``kernel`` over ``n`` DOFs into ``result``; no launch at all for ``n = 0``."""
+    if n:
+        _warp().launch(kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+
+
+def _check_response(response: Any) -> Any:
+    """Refuse a negative ``response`` given on the host; a Warp array is not read (no device copy)."""
+    if not _is_warp_array(response):
+        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
+        if negative.any():
+            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
+            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
+    return response
+
+
 def _check_params(params: object) -> EnvelopeArrays:
     if not isinstance(params, EnvelopeArrays):
         raise InputError(f"params: expected an EnvelopeArrays, got {type(params).__name__}")
@@ -211,13 +230,14 @@ def effort_limit(params: EnvelopeArrays, velocity: Any, *, out: Any = None) -> A
         out: Optional float32 ``(N,)`` Warp array to write into.
 
     Returns:
-        The limit [N*m or N], float32 Warp array ``(N,)`` on ``params.device``.
+        The limit [N*m or N], float32 Warp array ``(N,)`` on ``params.device``: 0 at a NaN
+        velocity, the limit at infinite speed at an infinite one (``docs/kernels.md``).
     """
     params = _check_params(params)
     n, device = params.count, params.device
     result = _output(out, n, device)
     inputs = [*params.as_inputs(), _as_array(velocity, n, device, "velocity")]
-    _warp().launch(_funcs()._effort_limit_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    _launch(_funcs()._effort_limit_kernel, n, inputs, result, device)
     return result
 
 
@@ -231,7 +251,7 @@ def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any
         out: Optional float32 ``(N,)`` Warp array to write into (may be ``effort`` itself).
 
     Returns:
-        Clamped effort [N*m or N], float32 Warp array ``(N,)``.
+        Clamped effort [N*m or N], float32 Warp array ``(N,)``; a NaN effort or velocity gives 0.
     """
     params = _check_params(params)
     n, device = params.count, params.device
@@ -241,7 +261,7 @@ def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any
         _as_array(effort, n, device, "effort"),
         _as_array(velocity, n, device, "velocity"),
     ]
-    _warp().launch(_funcs()._clamp_effort_kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    _launch(_funcs()._clamp_effort_kernel, n, inputs, result, device)
     return result
 
 
@@ -273,13 +293,18 @@ def clamp_effort_implicit(
         params: Per-DOF envelopes (``N`` DOFs).
         requested_effort: Requested total actuator effort [N*m or N].
         velocity: Joint velocity that already contains ``applied_effort`` [rad/s or m/s].
-        response: Joint velocity change per unit joint impulse [rad/s/(N*m*s) or m/s/(N*s)].
+        response: Joint velocity change per unit joint impulse [rad/s/(N*m*s) or m/s/(N*s)],
+            ``>= 0``: a negative value given on the host (a number, a NumPy array) is refused, one
+            in a Warp array is not read (no device copy) and gives the guarded result.
         dt: Time step [s], ``> 0``.
         applied_effort: Total actuator effort already applied this step [N*m or N].
         out: Optional float32 ``(N,)`` Warp array to write into.
 
     Returns:
         Clamped total effort [N*m or N], float32 Warp array ``(N,)``.
+
+    Raises:
+        InputError: a bad ``dt``, shape, dtype or device, or a negative ``response`` on the host.
     """
     params = _check_params(params)
     step = _check_dt(dt)
@@ -289,12 +314,11 @@ def clamp_effort_implicit(
         *params.as_inputs(),
         _as_array(requested_effort, n, device, "requested_effort"),
         _as_array(velocity, n, device, "velocity"),
-        _as_array(response, n, device, "response"),
+        _as_array(_check_response(response), n, device, "response"),
         step,
         _as_array(applied_effort, n, device, "applied_effort"),
     ]
-    kernel = _funcs()._clamp_effort_implicit_kernel
-    _warp().launch(kernel, dim=n, inputs=inputs, outputs=[result], device=device)
+    _launch(_funcs()._clamp_effort_implicit_kernel, n, inputs, result, device)
     return result
 
 

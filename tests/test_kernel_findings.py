@@ -1,0 +1,514 @@
+"""Regression tests for three findings in the batched backends (NumPy, Warp, torch; CPU only).
+
+1. torch kept dtypes silently and broke autograd: the effort-level ops now return the dtype of the
+   ``EnvelopeTensors``, refuse tensors of any other dtype with a one-line ``InputError`` naming the
+   argument and both dtypes, and the explicit clamp differentiates (1 inside, 0 where clipped).
+2. NaN and infinity had different rules per backend and per clamp: now one rule everywhere for the
+   explicit clamp and the effort limit (a NaN effort or velocity gives 0; an infinite velocity the
+   limit at infinite speed: 0 when ``R > 0`` or ``v_max`` is finite, else ``max_effort``; an
+   infinite effort the limit), without a RuntimeWarning.
+3. Edge cases where Warp and torch disagreed: zero DOFs work in both, torch names shapes that do
+   not broadcast in an ``InputError``, and a negative ``response`` on the host is refused by all
+   three backends (a Warp array or torch tensor is not read: that would sync with the device).
+
+Each backend's tests skip cleanly where its package is missing (``pytest.importorskip``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import pytest
+
+import drive_envelope as de
+from drive_envelope.errors import InputError
+
+F32_MAX = float(np.finfo(np.float32).max)
+NAMES = ("max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient")
+
+
+def _torch() -> Any:
+    pytest.importorskip("torch")
+    import drive_envelope.torch as dt
+
+    return dt
+
+
+def _warp() -> Any:
+    wp = pytest.importorskip("warp")
+    wp.config.quiet = True
+    import drive_envelope.warp as dw
+
+    return dw
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal element for element (-0.0 equals 0.0), no NaN allowed on either side."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.array_equal(a, b)) and not np.isnan(a).any()
+
+
+def _close(a: Any, b: Any, rtol: float) -> bool:
+    """Equal within ``rtol`` (zeros, infinities and the limits' end points exactly), no NaN."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.allclose(a, b, rtol=rtol, atol=0.0)) and not np.isnan(a).any()
+
+
+def _rounded(env: de.PerformanceEnvelope) -> de.PerformanceEnvelope:
+    """``env`` with its four values as float32 holds them (what a float32 backend computes with)."""
+    return de.PerformanceEnvelope(**{n: float(np.float32(getattr(env, n))) for n in NAMES})
+
+
+def _one_line(error: pytest.ExceptionInfo[InputError], *parts: str) -> None:
+    text = str(error.value)
+    assert "\n" not in text
+    for part in parts:
+        assert part in text, (part, text)
+
+
+# -- the rule, written out independently of any backend ------------------------------------------
+
+
+def _expected_limit(env: de.PerformanceEnvelope, velocity: float) -> float:
+    """The effort limit by the documented rule (float64, scalar)."""
+    if math.isnan(velocity):
+        return 0.0
+    speed = abs(velocity)
+    if math.isinf(speed):
+        bounded = env.velocity_dependent_resistance > 0.0 or math.isfinite(env.max_actuator_velocity)
+        return 0.0 if bounded else env.max_effort
+    return float(env.effort_limit(speed))  # the finite formula is checked in test_envelope_model
+
+
+def _expected_clamp(env: de.PerformanceEnvelope, effort: float, velocity: float) -> float:
+    if math.isnan(effort):
+        return 0.0
+    limit = _expected_limit(env, velocity)
+    return min(max(effort, -limit), limit)
+
+
+RULE_ENVELOPES = [
+    de.PerformanceEnvelope(max_effort=2.0),  # neither line: max_effort at any speed
+    de.PerformanceEnvelope(max_effort=2.0, speed_effort_gradient=0.5),  # G without a speed limit
+    de.PerformanceEnvelope(max_effort=2.0, velocity_dependent_resistance=0.1),
+    de.PerformanceEnvelope(max_effort=2.0, velocity_dependent_resistance=1e-300),  # R*v_max < max_effort
+    de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0),  # G = 0: the yes/no test
+    de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5),
+    de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=F32_MAX),  # PhysX's FLT_MAX "no limit"
+    de.PerformanceEnvelope(
+        max_effort=2.0,
+        max_actuator_velocity=3.0,
+        velocity_dependent_resistance=0.1,
+        speed_effort_gradient=0.5,
+    ),
+]
+RULE_VELOCITIES = [0.0, 1.0, -2.5, 3.0, 4.0, math.inf, -math.inf, math.nan]
+RULE_EFFORTS = [0.0, 1.0, -5.0, math.inf, -math.inf, math.nan]
+
+
+def _rule_grid() -> tuple[list[de.PerformanceEnvelope], np.ndarray, np.ndarray]:
+    rows = list(itertools.product(RULE_ENVELOPES, RULE_EFFORTS, RULE_VELOCITIES))
+    return [r[0] for r in rows], np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
+
+
+def _expected_grid(
+    float32: bool = False,
+) -> tuple[list[de.PerformanceEnvelope], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rule's grid and its expected clamp and limit (for float32: on the float32 envelope values)."""
+    envs, effort, velocity = _rule_grid()
+    if float32:  # R = 1e-300 is 0 in float32: the envelope then has neither line
+        envs = [_rounded(e) for e in envs]
+    clamped = np.array([_expected_clamp(e, x, v) for e, x, v in zip(envs, effort, velocity, strict=True)])
+    limit = np.array([_expected_limit(e, v) for e, v in zip(envs, velocity, strict=True)])
+    return envs, effort, velocity, clamped, limit
+
+
+# -- finding 2: NaN and infinity ---------------------------------------------------------------------
+
+
+def test_numpy_follows_the_nan_and_infinity_rule_without_warnings() -> None:
+    """Give 0 for a NaN effort or velocity and the limit at infinite speed, in NumPy, warning-free."""
+    envs, effort, velocity, clamped, limit = _expected_grid()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = [float(de.clamp_effort(e, x, v)) for e, x, v in zip(envs, effort, velocity, strict=True)]
+        got_limit = [float(e.effort_limit(v)) for e, v in zip(envs, velocity, strict=True)]
+        # vectorized too (one envelope, many states)
+        vector = de.clamp_effort(RULE_ENVELOPES[0], np.array(RULE_EFFORTS), np.array([math.inf] * 6))
+    assert _same(got, clamped)
+    assert _same(got_limit, limit)
+    assert _same(vector, [0.0, 1.0, -2.0, 2.0, -2.0, 0.0])
+
+
+def test_numpy_reported_cases() -> None:
+    """The reported rows: NaN effort -> 0 (was NaN); effort 5 at infinite velocity -> 0, no warning."""
+    env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert float(de.clamp_effort(env, effort=math.nan, velocity=1.0)) == 0.0
+        assert float(de.clamp_effort(env, effort=5.0, velocity=np.inf)) == 0.0
+        assert (
+            float(de.clamp_effort(de.PerformanceEnvelope(max_effort=2.0), effort=5.0, velocity=np.inf)) == 2.0
+        )
+        assert float(env.effort_limit(math.nan)) == 0.0
+
+
+def test_warp_follows_the_rule() -> None:
+    """Give the rule's numbers from Warp's launches (float32) for effort_limit and clamp_effort."""
+    dw = _warp()
+    envs, effort, velocity, clamped, limit = _expected_grid(float32=True)
+    params = dw.EnvelopeArrays.from_envelopes(envs, device="cpu")
+    got = dw.clamp_effort(params, effort, velocity).numpy()
+    got_limit = dw.effort_limit(params, velocity).numpy()
+    assert _close(got, clamped, 1e-6)
+    assert _close(got_limit, limit, 1e-6)
+
+
+def test_warp_funcs_follow_the_rule_in_float64() -> None:
+    """Give the rule's numbers from the generic @wp.func building blocks in float64 (Newton's solve)."""
+    _warp()
+    import warp as wp
+
+    from drive_envelope._src.kernels import warp_funcs
+
+    clamp_func, limit_func = warp_funcs.clamp_effort_func, warp_funcs.effort_limit_func
+
+    @wp.kernel
+    def rule(
+        env: wp.array2d(dtype=wp.float64),
+        effort: wp.array(dtype=wp.float64),
+        velocity: wp.array(dtype=wp.float64),
+        out: wp.array2d(dtype=wp.float64),
+    ):
+        i = wp.tid()
+        out[i, 0] = clamp_func(env[i, 0], env[i, 1], env[i, 2], env[i, 3], effort[i], velocity[i])
+        out[i, 1] = limit_func(env[i, 0], env[i, 1], env[i, 2], env[i, 3], velocity[i])
+
+    envs, effort, velocity, clamped, limit = _expected_grid()
+    rows = np.array([[getattr(e, n) for n in NAMES] for e in envs])
+    out = wp.zeros((len(envs), 2), dtype=wp.float64, device="cpu")
+    inputs = [wp.array(a, dtype=wp.float64, device="cpu") for a in (rows, effort, velocity)]
+    wp.launch(rule, dim=len(envs), inputs=inputs, outputs=[out], device="cpu")
+    assert _same(out.numpy()[:, 0], clamped)
+    assert _same(out.numpy()[:, 1], limit)
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_torch_follows_the_rule(dtype: str) -> None:
+    """Give the rule's numbers from torch, with and without autograd recording, both CPU code paths."""
+    dt = _torch()
+    import torch
+
+    from drive_envelope._src.kernels import torch_ops
+
+    envs, effort, velocity, clamped, limit = _expected_grid(float32=dtype == "float32")
+    kind = getattr(torch, dtype)
+    rtol = 1e-6 if dtype == "float32" else 1e-15
+    params = dt.EnvelopeTensors.from_envelopes(envs, dtype=kind)
+    e, v = torch.tensor(effort, dtype=kind), torch.tensor(velocity, dtype=kind)
+    result, result_limit = dt.clamp_effort(params, e, v), dt.effort_limit(params, v)
+    assert _close(result, clamped, rtol)
+    assert _close(result_limit, limit, rtol)
+    tracked = e.clone().requires_grad_(True)
+    assert _same(dt.clamp_effort(params, tracked, v).detach(), result)
+    with torch.enable_grad():
+        assert _same(dt.effort_limit(params, v.clone().requires_grad_(True)).detach(), result_limit)
+    # the torch.fmin way (CUDA's) and the vectorized way (the CPU's) give the same numbers
+    views = torch.broadcast_tensors(v, *params.as_tuple())
+    for vectorized in (True, False):
+        plain, _ = torch_ops._limit_buffers(*views, vectorized=vectorized)
+        assert _same(plain.nan_to_num(nan=0.0), result_limit), vectorized
+
+
+def test_backends_agree_on_random_states_and_special_values() -> None:
+    """Give the NumPy reference's numbers from torch float64 and Warp's from torch float32 (a few ulps).
+
+    The special values (NaN, infinite, huge) come out exactly; torch's CPU ``addcmul`` may fuse
+    ``max_effort - R*|v|`` into one rounding where NumPy and Warp round twice (one ulp).
+    """
+    rng = np.random.default_rng(11)
+    n = 3000
+    special = np.array([0.0, math.inf, -math.inf, math.nan, 3.0, 1e38, -1e38])
+    velocity = np.where(rng.random(n) < 0.1, rng.choice(special, n), rng.normal(0.0, 4.0, n))
+    effort = np.where(rng.random(n) < 0.1, rng.choice(special, n), rng.normal(0.0, 6.0, n))
+    envs = [RULE_ENVELOPES[i] for i in rng.integers(0, len(RULE_ENVELOPES), n)]
+    reference = np.array(
+        [float(de.clamp_effort(e, x, v)) for e, x, v in zip(envs, effort, velocity, strict=True)]
+    )
+    assert not np.isnan(reference).any()
+    try:
+        dt = _torch()
+    except pytest.skip.Exception:
+        dt = None
+    if dt is not None:
+        import torch
+
+        p64 = dt.EnvelopeTensors.from_envelopes(envs, dtype=torch.float64)
+        assert _close(dt.clamp_effort(p64, effort, velocity), reference, 1e-15)
+    try:
+        dw = _warp()
+    except pytest.skip.Exception:
+        return
+    warp32 = dw.clamp_effort(dw.EnvelopeArrays.from_envelopes(envs, device="cpu"), effort, velocity).numpy()
+    assert not np.isnan(warp32).any()
+    if dt is not None:
+        p32 = dt.EnvelopeTensors.from_envelopes(envs)
+        torch32 = dt.clamp_effort(p32, effort.astype(np.float32), velocity.astype(np.float32))
+        assert _close(torch32, warp32, 1e-6)
+
+
+# -- finding 1: torch dtypes and autograd ------------------------------------------------------------
+
+ENV = de.PerformanceEnvelope(
+    max_effort=12.0, max_actuator_velocity=10.0, velocity_dependent_resistance=0.1, speed_effort_gradient=0.5
+)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_torch_results_have_the_envelope_dtype(dtype: str) -> None:
+    """Return the EnvelopeTensors' dtype from every effort-level op (float64 is no longer lost)."""
+    dt = _torch()
+    import torch
+
+    kind = getattr(torch, dtype)
+    params = dt.EnvelopeTensors.from_envelopes(ENV, device="cpu", dtype=kind)
+    x = torch.tensor([5.0, 20.0], dtype=kind)
+    v = torch.tensor([1.0, -3.0], dtype=kind)
+    assert dt.clamp_effort(params, x, v).dtype == kind
+    assert dt.effort_limit(params, v).dtype == kind
+    assert dt.clamp_effort_implicit(params, x, v, torch.ones(2, dtype=kind), 0.01).dtype == kind
+    # host values are read in the envelope's dtype
+    assert dt.clamp_effort(params, [5.0, 20.0], np.array([1.0, -3.0])).dtype == kind
+    if kind == torch.float64:  # the float64 reference's numbers, bit for bit
+        assert _same(dt.clamp_effort(params, x, v), de.clamp_effort(ENV, x.numpy(), v.numpy()))
+        implicit = dt.clamp_effort_implicit(params, x, v, 2.0, 0.01)
+        np.testing.assert_allclose(implicit, de.clamp_effort_implicit(ENV, x.numpy(), v.numpy(), 2.0, 0.01))
+
+
+@pytest.mark.parametrize("bad", ["float64", "float16", "bfloat16", "int64", "bool"])
+def test_torch_refuses_a_tensor_of_another_dtype(bad: str) -> None:
+    """Refuse a tensor whose dtype is not the envelope's, naming the argument and both dtypes."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, device="cpu")  # float32
+    wrong = torch.ones(2).to(getattr(torch, bad))
+    good = torch.ones(2)
+    for call, name in [
+        (lambda: dt.clamp_effort(params, wrong, good), "effort"),
+        (lambda: dt.clamp_effort(params, good, wrong), "velocity"),
+        (lambda: dt.effort_limit(params, wrong), "velocity"),
+        (lambda: dt.clamp_effort_implicit(params, wrong, good, good, 0.01), "requested_effort"),
+        (lambda: dt.clamp_effort_implicit(params, good, good, wrong, 0.01), "response"),
+        (lambda: dt.clamp_effort_implicit(params, good, good, good, 0.01, wrong), "applied_effort"),
+    ]:
+        with pytest.raises(InputError) as error:
+            call()
+        _one_line(error, f"{name}:", f"torch.{bad}", "torch.float32")
+        if getattr(torch, bad).is_floating_point:
+            _one_line(error, f"dtype=torch.{bad}")
+
+
+def test_torch_explicit_clamp_differentiates() -> None:
+    """Let autograd through the explicit clamp: d/d effort 1 inside, 0 clipped; the same numbers."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, device="cpu")
+    v = torch.tensor([0.0, 0.0, 2.0, -2.0, 11.0, math.nan])
+    effort = torch.tensor([5.0, 20.0, -20.0, 3.0, 1.0, 1.0], requires_grad=True)
+    clamped = dt.clamp_effort(params, effort, v)  # was: RuntimeError: maximum(): functions with out=...
+    clamped.sum().backward()
+    assert effort.grad is not None
+    assert effort.grad.tolist() == [1.0, 0.0, 0.0, 1.0, 0.0, 0.0]
+    with torch.no_grad():
+        assert torch.equal(clamped, dt.clamp_effort(params, effort, v))
+    # the reported call
+    x = torch.tensor([5.0, 20.0], requires_grad=True)
+    dt.clamp_effort(params, x, torch.tensor([1.0, 1.0])).sum().backward()
+    assert x.grad is not None and x.grad.tolist() == [1.0, 0.0]
+
+
+def test_torch_gradients_through_velocity_and_parameters() -> None:
+    """Differentiate w.r.t. velocity and envelope tensors (float64 gradcheck), finite at non-finite v."""
+    dt = _torch()
+    import torch
+
+    def clip(max_e: Any, max_v: Any, resist: Any, grad: Any, v: Any) -> Any:
+        params = dt.EnvelopeTensors(
+            max_effort=max_e,
+            max_actuator_velocity=max_v,
+            velocity_dependent_resistance=resist,
+            speed_effort_gradient=grad,
+        )
+        return dt.clamp_effort(params, torch.tensor([30.0, -30.0, 30.0], dtype=torch.float64), v)
+
+    # smooth points: eq. 1 binds at |v| = 1, eq. 2 at |v| = 6 and 9 (away from every kink)
+    args = [
+        torch.tensor(x, dtype=torch.float64, requires_grad=True)
+        for x in ([12.0] * 3, [10.0] * 3, [0.1] * 3, [0.5] * 3, [1.0, -6.0, 9.0])
+    ]
+    assert torch.autograd.gradcheck(clip, args)
+    # a NaN or infinite velocity, or G = 0 (a division by zero in the speed line): finite gradients
+    params = [torch.tensor([12.0, 12.0, 12.0], dtype=torch.float64, requires_grad=True) for _ in range(2)]
+    params += [torch.zeros(3, dtype=torch.float64, requires_grad=True) for _ in range(2)]
+    params[1] = torch.tensor([10.0, math.inf, 10.0], dtype=torch.float64, requires_grad=True)
+    v = torch.tensor([math.nan, math.inf, 3.0], dtype=torch.float64, requires_grad=True)
+    out = clip(*params, v)
+    out.sum().backward()
+    for tensor in [*params, v]:
+        assert tensor.grad is not None and torch.isfinite(tensor.grad).all()
+    assert out.tolist() == [0.0, -12.0, 12.0]
+
+
+def test_torch_no_grad_path_records_nothing() -> None:
+    """Run in place without a graph where nothing requires grad (also under inference_mode)."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, count=4)
+    out = dt.clamp_effort(params, torch.full((4,), 20.0), torch.zeros(4))
+    assert out.grad_fn is None and out.tolist() == [12.0] * 4
+    with torch.inference_mode():
+        assert dt.clamp_effort(params, torch.full((4,), 20.0), torch.zeros(4)).tolist() == [12.0] * 4
+
+
+def test_torch_implicit_clamp_accepts_tensors_requiring_grad() -> None:
+    """Run the implicit clamp on a request that requires grad (no out= there), float64 kept."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, dtype=torch.float64)
+    request = torch.tensor([5.0, 50.0], dtype=torch.float64, requires_grad=True)
+    effort = dt.clamp_effort_implicit(params, request, torch.zeros(2, dtype=torch.float64), 2.0, 0.01)
+    effort.sum().backward()
+    assert effort.dtype == torch.float64 and request.grad is not None
+
+
+# -- finding 3: edge cases -----------------------------------------------------------------------------
+
+
+def test_warp_accepts_zero_dofs() -> None:
+    """Build empty EnvelopeArrays (count 0) and get empty results from every launch."""
+    dw = _warp()
+    import warp as wp
+
+    for params in (
+        dw.EnvelopeArrays.from_envelopes(ENV, count=0, device="cpu"),
+        dw.EnvelopeArrays.from_values(max_effort=1.0, count=0, device="cpu"),
+        dw.EnvelopeArrays.from_values(max_effort=[], device="cpu"),
+    ):
+        assert params.count == 0
+        empty = np.zeros(0, dtype=np.float32)
+        assert dw.effort_limit(params, empty).shape == (0,)
+        assert dw.clamp_effort(params, empty, 0.0).shape == (0,)
+        assert dw.clamp_effort_implicit(params, 1.0, empty, 2.0, 0.01).shape == (0,)
+        out = wp.empty(0, dtype=wp.float32, device="cpu")
+        assert dw.clamp_effort(params, empty, empty, out=out) is out
+    with pytest.raises(InputError) as error:
+        dw.EnvelopeArrays.from_envelopes(ENV, count=-1, device="cpu")
+    _one_line(error, "count", ">= 0", "-1")
+    with pytest.raises(InputError) as error:
+        dw.EnvelopeArrays.from_values(max_effort=1.0, count=-2, device="cpu")
+    _one_line(error, "count", ">= 0", "-2")
+
+
+def test_torch_accepts_zero_dofs() -> None:
+    """Give (0,) results for an empty batch, as Warp now does."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, count=0)
+    assert params.shape == (0,)
+    empty = torch.zeros(0)
+    assert dt.clamp_effort(params, empty, empty).shape == (0,)
+    assert dt.effort_limit(params, empty).shape == (0,)
+    assert dt.clamp_effort_implicit(params, empty, empty, 2.0, 0.01).shape == (0,)
+
+
+def test_torch_names_shapes_that_do_not_broadcast() -> None:
+    """Refuse shapes that do not broadcast with an InputError naming each shape (was a RuntimeError)."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(ENV, count=5)
+    five, three = torch.zeros(5), torch.zeros(3)
+    for call, where in [
+        (lambda: dt.clamp_effort(params, three, five), "clamp_effort"),
+        (lambda: dt.clamp_effort(params, five, three.requires_grad_(True)), "clamp_effort"),
+        (lambda: dt.effort_limit(params, three), "effort_limit"),
+        (lambda: dt.clamp_effort_implicit(params, five, five, three, 0.01), "clamp_effort_implicit"),
+    ]:
+        with pytest.raises(InputError) as error:
+            call()
+        _one_line(error, where, "(5,)", "(3,)", "broadcast")
+
+
+def test_negative_response_is_refused_on_the_host_in_every_backend() -> None:
+    """Refuse a negative response given as a number or NumPy array in NumPy, Warp and torch alike."""
+    with pytest.raises(InputError) as error:
+        de.clamp_effort_implicit(ENV, 1.0, 0.0, -1.0, 0.01)
+    _one_line(error, "response", ">= 0", "-1.0")
+    with pytest.raises(InputError, match="response"):
+        de.clamp_effort_implicit(ENV, [1.0, 1.0], 0.0, np.array([2.0, -0.5]), 0.01)
+    for backend in ("warp", "torch"):
+        try:
+            module = _warp() if backend == "warp" else _torch()
+        except pytest.skip.Exception:
+            continue
+        if backend == "warp":
+            params = module.EnvelopeArrays.from_envelopes(ENV, count=2, device="cpu")
+        else:
+            params = module.EnvelopeTensors.from_envelopes(ENV, count=2)
+        for response in (-1.0, np.array([2.0, -0.5])):
+            with pytest.raises(InputError) as error:
+                module.clamp_effort_implicit(params, 1.0, 0.0, response, 0.01)
+            _one_line(error, "response", ">= 0")
+
+
+def test_device_response_is_not_read_and_gives_the_guarded_result() -> None:
+    """Read no device value: a negative response in a Warp array or a tensor gives a guarded result."""
+    request = np.array([5.0, -50.0, 50.0, 3.0], dtype=np.float32)
+    velocity = np.array([0.0, 2.0, -9.0, 1.0], dtype=np.float32)
+    response = np.array([-2.0, -50.0, -1e3, math.nan], dtype=np.float32)
+    results = []
+    try:
+        dw = _warp()
+        import warp as wp
+
+        params = dw.EnvelopeArrays.from_envelopes(ENV, count=4, device="cpu")
+        device_response = wp.array(response, dtype=wp.float32, device="cpu")
+        results.append(dw.clamp_effort_implicit(params, request, velocity, device_response, 0.01).numpy())
+    except pytest.skip.Exception:
+        pass
+    try:
+        dt = _torch()
+        import torch
+
+        params = dt.EnvelopeTensors.from_envelopes(ENV, count=4)
+        tensor_response = torch.from_numpy(response)
+        results.append(dt.clamp_effort_implicit(params, request, velocity, tensor_response, 0.01).numpy())
+    except pytest.skip.Exception:
+        pass
+    if not results:
+        pytest.skip("neither warp nor torch is installed")
+    for result in results:
+        assert not np.isnan(result).any()
+        assert (np.abs(result) <= ENV.max_effort).all()
+        assert (result * request >= 0.0).all() and (np.abs(result) <= np.abs(request)).all()
+        assert result[3] == 0.0  # a NaN response lets the drive go, as in NumPy
+    assert float(de.clamp_effort_implicit(ENV, 3.0, 1.0, math.nan, 0.01)) == 0.0
+    if len(results) == 2:
+        np.testing.assert_allclose(results[0], results[1], rtol=1e-5, atol=1e-4)
+
+
+@pytest.mark.parametrize("dt_value", [0.0, -0.01, math.inf, math.nan, True])
+def test_numpy_implicit_refuses_a_bad_time_step_like_warp_and_torch(dt_value: float) -> None:
+    """Refuse a time step that is not finite and > 0 with InputError in NumPy too."""
+    with pytest.raises(InputError) as error:
+        de.clamp_effort_implicit(ENV, 1.0, 0.0, 1.0, dt_value)
+    _one_line(error, "dt:", "> 0 and finite")
