@@ -147,9 +147,12 @@ def test_a_printed_gradient_that_disagrees_with_resistance_draws_a_warning() -> 
     assert derive(datasheet_from_mapping(_sheet(**motor), source="m.toml")).warnings == ()
 
 
-def test_an_efficiency_typed_as_a_tiny_percentage_draws_a_warning(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["derive", "tmotor-ak80-6", "--json", "--set", "gear.efficiency=0.9 %"]) == 0
-    err = capsys.readouterr().err
+@pytest.mark.parametrize("format", ["text", "json"])
+def test_an_efficiency_typed_as_a_tiny_percentage_draws_a_warning(
+    format: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["derive", "tmotor-ak80-6", "--format", format, "--set", "gear.efficiency=0.9 %"]) == 0
+    err = capsys.readouterr().err  # on stderr whatever stdout shows: it may be a file
     assert "gear.efficiency = 0.009 is unusually low: a percentage needs its sign" in err
 
 
@@ -171,8 +174,10 @@ def test_a_run_of_no_step_is_refused(tmp_path: Path, capsys: pytest.CaptureFixtu
     out = tmp_path / "run.csv"
     argv = ["simulate", str(CORPUS / "scenario.toml"), "-o", str(out), "--set", "simulation.dt=1"]
     assert main(argv) == 2  # the scenario's duration is 0.1 s
-    assert "gives no step (steps = round(duration / dt) = 0)" in capsys.readouterr().err
+    assert "simulation.dt = 1 s is longer than simulation.duration = 0.1 s" in capsys.readouterr().err
     assert not out.exists()
+    argv[-1] = "simulation.dt=0.15"  # round(0.1 / 0.15) = 1 step, but dt > duration all the same
+    assert main(argv) == 2 and "is longer than simulation.duration" in capsys.readouterr().err
 
 
 def test_a_duration_that_is_not_whole_steps_says_where_the_run_ends(

@@ -416,3 +416,30 @@ def test_the_docs_give_the_panda_numbers_and_the_cause() -> None:
     for fact in ("869", "18.8 %", "1803", "727", "joint limits", "equality", "0 samples outside"):
         assert fact in section, fact
     assert section.count("|") > 10  # the table
+
+
+FORCE_RANGE = """<mujoco><worldbody><body><joint name="shoulder" type="hinge"/><geom size="0.1" mass="1"/>
+</body><body pos="1 0 0"><joint name="elbow" type="hinge"/><geom size="0.1" mass="1"/></body></worldbody>
+<actuator><motor name="ms" joint="shoulder" forcerange="-5 5"/>
+<motor name="me" joint="elbow" forcerange="-20 20"/></actuator></mujoco>"""
+
+
+def test_a_tighter_force_range_that_the_drive_replaces_is_a_warning(
+    mujoco: Any, tmp_path: Path, capsys: Any
+) -> None:
+    """The AK80-6's 12 N*m replaces a 5 N*m forcerange (warned) and a 20 N*m one (nothing to say)."""
+    model = tmp_path / "fr.xml"
+    model.write_text(FORCE_RANGE, encoding="utf-8")
+    for joint in ("shoulder", "elbow"):
+        out = tmp_path / f"{joint}.xml"
+        argv = ["mujoco", "apply", str(model), "--joint", joint, "--datasheet", "tmotor-ak80-6",
+                "--stiffness", "10", "--damping", "1", "-o", str(out)]  # fmt: skip
+        assert _cli(*argv) == 0
+        err = capsys.readouterr().err
+        if joint == "shoulder":
+            assert (
+                "actuator 'ms' had forcerange [-5, 5] N*m, tighter than the envelope's max_effort 12 N*m"
+                in err
+            )
+        else:
+            assert "forcerange" not in err

@@ -92,9 +92,8 @@ def _run(args: argparse.Namespace) -> int:
         print(derivation_report(derivation))
     else:
         print(envelope_text(derivation.envelope, args.format), end="")
-    if args.format != "text":  # the text report lists them itself
-        for warning in derivation.warnings:
-            warn(warning)
+    for warning in derivation.warnings:  # on stderr too: stdout may be a file nobody reads now
+        warn(warning)
     if output is not None:
         status(f"wrote {output} ({file_format})")
     return 0

@@ -111,7 +111,7 @@ def _say_rounded_duration(duration: float, dt: float, steps: int) -> None:
     if abs(steps * dt - duration) > 0.01 * dt:  # a dt written to a few digits (0.0083333) is no news
         status(
             f"simulation.duration = {duration:g} s is not a whole number of steps of dt = {dt:g} s: "
-            f"simulating round(duration / dt) = {steps} steps, to {steps * dt:g} s"
+            f"simulating round(duration / dt) = {steps} step{'s' if steps != 1 else ''}, to {steps * dt:g} s"
         )
 
 

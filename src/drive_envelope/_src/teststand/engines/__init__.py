@@ -106,17 +106,17 @@ def check_steps(scenario: Scenario, max_steps: int = MAX_STEPS) -> int:
     """The number of steps of ``scenario``, refused above ``max_steps``.
 
     Raises:
-        InputError: no step (a duration shorter than half a step), more than ``max_steps`` steps, or a
+        InputError: a dt longer than the duration, more than ``max_steps`` steps, or a
             ``max_steps`` that is not an integer >= 1.
     """
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
         raise InputError(f"--max-steps: expected an integer >= 1, got {max_steps!r}")
     sim = scenario.simulation
     steps = sim.steps
-    if steps == 0:
+    if sim.dt > sim.duration:
         raise InputError(
-            f"simulation.duration = {sim.duration:g} s with simulation.dt = {sim.dt:g} s gives no step "
-            "(steps = round(duration / dt) = 0); expected a duration of at least one dt"
+            f"simulation.dt = {sim.dt:g} s is longer than simulation.duration = {sim.duration:g} s; "
+            "expected a duration of at least one dt"
         )
     if steps > max_steps:
         raise InputError(
