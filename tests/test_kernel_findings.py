@@ -217,11 +217,9 @@ def test_torch_follows_the_rule(dtype: str) -> None:
     assert _same(dt.clamp_effort(params, tracked, v).detach(), result)
     with torch.enable_grad():
         assert _same(dt.effort_limit(params, v.clone().requires_grad_(True)).detach(), result_limit)
-    # the torch.fmin way (CUDA's) and the vectorized way (the CPU's) give the same numbers
-    views = torch.broadcast_tensors(v, *params.as_tuple())
-    for vectorized in (True, False):
-        plain, _ = torch_ops._limit_buffers(*views, vectorized=vectorized)
-        assert _same(plain.nan_to_num(nan=0.0), result_limit), vectorized
+    views = torch.broadcast_tensors(v, *params.as_tuple())  # the in-place buffers behind both
+    plain, _ = torch_ops._limit_buffers(*views)
+    assert _same(plain.nan_to_num(nan=0.0), result_limit)
 
 
 def test_backends_agree_on_random_states_and_special_values() -> None:

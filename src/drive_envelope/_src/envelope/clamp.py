@@ -70,6 +70,7 @@ __all__ = [
     "CLAMP_DRIVE_IMPULSE_ARGS",
     "PX_EPS_F32",
     "PX_MAX_F32",
+    "check_time_step",
     "clamp_drive_impulse",
     "clamp_effort",
     "clamp_effort_implicit",
@@ -114,19 +115,25 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
     limit = envelope.effort_limit(velocity)  # >= 0, never NaN
     effort = np.asarray(effort, dtype=np.float64)
     clamped = np.minimum(effort, limit, out=np.empty(np.broadcast_shapes(effort.shape, limit.shape)))
-    np.maximum(clamped, np.negative(limit, out=limit), out=clamped)
+    # -L as 0 - L, not np.negative: where L = 0 the lower bound is +0.0, so a let-go (L = 0) gives
+    # +0.0 whatever the effort's sign (np.maximum returns its second operand on a tie), as torch
+    # and Warp do; where L > 0 it is -L exactly and an effort of -0.0 stays -0.0
+    np.maximum(clamped, np.subtract(0.0, limit, out=limit), out=clamped)
     if np.isnan(np.min(clamped, initial=0.0)):  # a NaN effort (one read pass finds it): let go
         clamped[np.isnan(clamped)] = 0.0
     return clamped
 
 
-def _check_step(dt: object) -> float:
-    """``dt`` as a float, refused unless a finite time step ``> 0`` [s]."""
-    if (
-        isinstance(dt, bool)
-        or not isinstance(dt, (int, float, np.integer, np.floating))
-        or not 0.0 < float(dt) < math.inf
-    ):
+def check_time_step(dt: object) -> float:
+    """``dt`` as a float: a Python or NumPy number, finite and ``> 0`` [s] (every backend's rule).
+
+    An array or a tensor is refused, not read: ``float()`` of a CUDA tensor would sync with the
+    device, and the time step is one host number for the whole batch.
+    """
+    if not isinstance(dt, (int, float, np.integer, np.floating)):
+        kind = f"{type(dt).__module__}.{type(dt).__name__}"
+        raise InputError(f"dt: expected a Python float time step [s], got a {kind} {dt!r}; pass float(dt)")
+    if isinstance(dt, bool) or not 0.0 < float(dt) < math.inf:
         raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
     return float(dt)
 
@@ -162,7 +169,7 @@ def clamp_effort_implicit(
     Raises:
         InputError: ``dt`` not a finite number ``> 0``, or a negative ``response``.
     """
-    step = _check_step(dt)
+    step = check_time_step(dt)
     r = np.asarray(response, dtype=np.float64)
     negative = r < 0.0  # a NaN response is not refused: it lets the drive go, as any NaN does
     if negative.any():

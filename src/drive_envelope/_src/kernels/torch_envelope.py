@@ -64,7 +64,10 @@ def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
 
 
 def _host(value: object) -> object:
-    """A tensor's values as a NumPy array (validation reads them once, on the host); others as given."""
+    """A tensor's values as a NumPy array (validation reads them once, on the host); others as given.
+
+    ``detach()`` first: the check reads values only, so it records nothing on the autograd graph.
+    """
     import torch
 
     if isinstance(value, torch.Tensor):
@@ -169,7 +172,10 @@ class EnvelopeTensors:
         """Validate values of any shapes that broadcast together, then build the tensors.
 
         Each value is an SI number, a sequence, NumPy array or tensor of them (a tensor is read back
-        once to be checked), or a string with units (``"inf"``, ``"300 rpm"``).
+        once to be checked), or a string with units (``"inf"``, ``"300 rpm"``). A float tensor is
+        kept, not copied: already of ``dtype`` on ``device``, it is the field itself (``is`` the
+        tensor given, its autograd graph included); else it is moved with ``Tensor.to``, which
+        autograd records, so gradients reach the tensor given either way.
 
         Args:
             max_effort: [N*m or N], ``>= 0``, finite.
@@ -196,15 +202,25 @@ class EnvelopeTensors:
         except ValueError:
             shapes = ", ".join(f"{n}={a.shape}" for n, a in values.items())
             raise InputError(f"{where}: shapes do not broadcast ({shapes})") from None
-        return cls._build(values, device, dtype)
+        return cls._build(values, device, dtype, given)
 
     @classmethod
-    def _build(cls, values: dict[str, Any], device: Any, dtype: Any) -> EnvelopeTensors:
+    def _build(
+        cls, values: dict[str, Any], device: Any, dtype: Any, given: dict[str, Any] | None = None
+    ) -> EnvelopeTensors:
+        """The tensors of the validated ``values``; a float tensor in ``given`` is used itself."""
         import torch
 
         kind = resolve_dtype(dtype)
         target = torch.device(device)
-        return cls(**{n: torch.as_tensor(np.array(a), dtype=kind, device=target) for n, a in values.items()})
+        tensors = {}
+        for name, array in values.items():
+            value = None if given is None else given[name]
+            if isinstance(value, torch.Tensor) and value.is_floating_point():
+                tensors[name] = value.to(dtype=kind, device=target)  # itself when already so: graph kept
+            else:
+                tensors[name] = torch.as_tensor(np.array(array), dtype=kind, device=target)
+        return cls(**tensors)
 
 
 # -- the states the ops get: their dtype and shapes, checked on .dtype and .shape only ---------------

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
+from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32, check_time_step
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
@@ -326,43 +326,28 @@ def fused_clamp_drive_impulse(
 
 
 def _limit_buffers(
-    v: torch.Tensor,
-    max_e: torch.Tensor,
-    max_v: torch.Tensor,
-    resist: torch.Tensor,
-    grad: torch.Tensor,
-    *,
-    vectorized: bool | None = None,
+    v: torch.Tensor, max_e: torch.Tensor, max_v: torch.Tensor, resist: torch.Tensor, grad: torch.Tensor
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """``(L, spare)``: the limit in ``[0, max_effort]`` or NaN (where ``v`` is, or it is 0), a free buffer.
 
     All arguments have one (broadcast) shape; both results are fresh buffers of it (no autograd).
     The terms ``max_effort - R*|v|`` and ``(v_max - |v|)/G`` are NaN where they do not bind: ``R = 0``
     at an infinite speed (``0*inf``), ``v_max = inf`` there (``inf - inf``), ``G = 0`` at
-    ``|v| = v_max`` (``0/0``); the smaller of the others is the limit, so an infinite velocity gives
-    the limit at infinite speed. Two ways to the same numbers: ``vectorized`` (the default on the
-    CPU, where ``torch.fmin`` is a scalar loop, 12x ``torch.minimum``) turns a NaN term into
-    ``+inf`` and carries the NaN velocity alone in ``clamp_max(|v|, 0)`` (0, or NaN where ``v`` is),
-    with two kernels more; else ``torch.fmin`` drops a NaN term and the speed line sees the largest
-    finite speed instead of an infinite one (7 kernels, one more than before the NaN rule).
+    ``|v| = v_max`` (``0/0``). A NaN term becomes ``+inf``, so the smaller of the others is the limit
+    and an infinite velocity gives the limit at infinite speed; the NaN velocity alone is carried by
+    ``clamp_max(|v|, 0)`` (0, or NaN where ``v`` is). ``torch.minimum`` rather than ``torch.fmin``,
+    which is a scalar loop on the CPU (12x slower).
     """
     import torch
 
-    if vectorized is None:
-        vectorized = v.device.type == "cpu"
     speed = v.abs()  # fresh full-size buffers, reused in place: at RL scale these ops are memory-bound
     limit = torch.addcmul(max_e, resist, speed, value=-1.0)
-    if vectorized:
-        floor = speed.clamp_max(0.0)
-        line = torch.sub(max_v, speed, out=speed).div_(grad)
-        for term in (limit, line):
-            term.nan_to_num_(nan=math.inf, posinf=math.inf, neginf=-math.inf)
-        torch.minimum(limit, line, out=limit)
-        return torch.clamp(limit, floor, max_e, out=limit), speed
-    speed.clamp_max_(torch.finfo(v.dtype).max)
+    floor = speed.clamp_max(0.0)
     line = torch.sub(max_v, speed, out=speed).div_(grad)
-    torch.fmin(limit, line, out=limit)  # NaN only where both terms are: a NaN velocity
-    return torch.clamp(limit, _zero(v.dtype, v.device), max_e, out=limit), speed
+    for term in (limit, line):
+        term.nan_to_num_(nan=math.inf, posinf=math.inf, neginf=-math.inf)
+    torch.minimum(limit, line, out=limit)
+    return torch.clamp(limit, floor, max_e, out=limit), speed
 
 
 def _limit_tracked(
@@ -443,9 +428,13 @@ def clamp_effort(params: EnvelopeTensors, effort: Any, velocity: Any) -> torch.T
     tau_b, *views = broadcast_states("clamp_effort", params, effort=tau, velocity=v)
     if records_grad(params, tau, v):
         limit = _limit_tracked(v, *params.as_tuple())
-        return torch.nan_to_num(torch.clamp(tau, -limit, limit), nan=0.0, posinf=math.inf, neginf=-math.inf)
+        clamped = torch.clamp(tau, 0.0 - limit, limit)
+        return torch.nan_to_num(clamped, nan=0.0, posinf=math.inf, neginf=-math.inf)
     limit, spare = _limit_buffers(*views)
-    clamped = torch.clamp(tau_b, torch.neg(limit, out=spare), limit, out=limit)  # NaN: effort or L
+    # -L as 0 - L: where L = 0 both bounds are +0.0, so a nonzero effort gives +0.0 there (torch.clamp
+    # picks the sign of a zero tie by SIMD lane), as NumPy and Warp do
+    lower = torch.sub(_zero(limit.dtype, limit.device), limit, out=spare)
+    clamped = torch.clamp(tau_b, lower, limit, out=limit)  # NaN: effort or L
     return clamped.nan_to_num_(nan=0.0, posinf=math.inf, neginf=-math.inf)  # a NaN: the drive lets go
 
 
@@ -482,18 +471,12 @@ def clamp_effort_implicit(
     import torch
 
     params = check_params(params)
-    if (
-        isinstance(dt, bool)
-        or not isinstance(dt, (int, float, np.floating))
-        or not 0.0 < float(dt) < math.inf
-    ):
-        raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
+    step = check_time_step(dt)
     if not isinstance(response, torch.Tensor):
         negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
         if negative.any():
             bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
             raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
-    step = float(dt)
     tau, v, r, applied = state_tensors(
         params,
         requested_effort=requested_effort,

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS
+from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS, check_time_step
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
@@ -265,16 +265,6 @@ def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any
     return result
 
 
-def _check_dt(dt: float) -> float:
-    if (
-        isinstance(dt, bool)
-        or not isinstance(dt, (int, float, np.floating))
-        or not (0.0 < float(dt) < math.inf)
-    ):
-        raise InputError(f"dt: expected a time step > 0 and finite [s], got {dt!r}")
-    return float(dt)
-
-
 def clamp_effort_implicit(
     params: EnvelopeArrays,
     requested_effort: Any,
@@ -307,7 +297,7 @@ def clamp_effort_implicit(
         InputError: a bad ``dt``, shape, dtype or device, or a negative ``response`` on the host.
     """
     params = _check_params(params)
-    step = _check_dt(dt)
+    step = check_time_step(dt)
     n, device = params.count, params.device
     result = _output(out, n, device)
     inputs = [

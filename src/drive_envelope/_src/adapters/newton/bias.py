@@ -74,8 +74,14 @@ class BiasForce:
             coriolis: Include the Coriolis and centrifugal forces ``C(q, qd) qd`` (default), or only
                 gravity.
         """
+        import newton
         import warp as wp
 
+        if not isinstance(model, newton.Model):
+            hint = "; call builder.finalize() first" if isinstance(model, newton.ModelBuilder) else ""
+            raise InputError(
+                f"BiasForce: model: expected a finalized newton.Model, got {type(model).__name__}{hint}"
+            )
         count = int(model.joint_dof_count)
         if count < 1:
             raise InputError("BiasForce: the model has no joint DOFs")
@@ -101,6 +107,16 @@ class BiasForce:
         import newton
         import warp as wp
 
+        if not isinstance(state, newton.State):
+            raise InputError(f"BiasForce.compute: state: expected a newton.State, got {type(state).__name__}")
+        if external is not None and (not isinstance(external, wp.array) or external.dtype != wp.float32):
+            got = type(external).__name__
+            if isinstance(external, wp.array):
+                got = f"a wp.array of {getattr(external.dtype, '__name__', external.dtype)}"
+            raise InputError(
+                "BiasForce.compute: external: expected None or a float32 wp.array indexed like joint_qd, "
+                f"got {got}"
+            )
         if external is not None and external.shape != self.bias_force.shape:
             raise InputError(
                 f"BiasForce.compute: external has shape {external.shape}, expected {self.bias_force.shape}"

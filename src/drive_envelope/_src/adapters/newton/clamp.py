@@ -28,6 +28,7 @@ motor forces a braking effort; the envelope allows none.
 
 import functools
 import math
+from collections.abc import Mapping
 from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
@@ -54,6 +55,11 @@ def resolve_envelope_arguments(args: dict[str, Any]) -> dict[str, float]:
             where not allowed.
     """
     where = "ClampingPerformanceEnvelope"
+    if not isinstance(args, Mapping):
+        raise InputError(
+            f"{where}: args: expected a dict of envelope arguments ({', '.join(ENVELOPE_FIELDS)}), "
+            f"got {type(args).__name__}"
+        )
     for key in args:
         if key not in ENVELOPE_FIELDS:
             hint = nearest_key(str(key), ENVELOPE_FIELDS)
@@ -164,6 +170,16 @@ def build() -> type:
                 velocity_dependent_resistance: R [N*m*s/rad or N*s/m]; ``None``: 0.
                 speed_effort_gradient: G [(rad/s)/(N*m) or (m/s)/N]; ``None``: 0.
             """
+            for name, array in zip(
+                ENVELOPE_FIELDS,
+                (max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient),
+                strict=True,
+            ):
+                if array is not None and not isinstance(array, wp.array):
+                    raise InputError(
+                        f"ClampingPerformanceEnvelope: {name}: expected a float32 wp.array of shape (N,) "
+                        f"(pass scalars through builder.add_actuator), got {type(array).__name__}"
+                    )
             n, device = max_effort.shape, max_effort.device
             if max_actuator_velocity is None:
                 max_actuator_velocity = wp.full(n, math.inf, dtype=wp.float32, device=device)

@@ -56,6 +56,38 @@ class UsdEnvelopeActuator:
     """The drive's damping, now the actuator's ``kd`` [N*m*s/rad or N*s/m]."""
 
 
+def _check_builder(builder: Any) -> None:
+    """Refuse anything but a ``newton.ModelBuilder``, and a builder that has been finalized.
+
+    Newton 1.8 has no "finalized" flag and ``finalize`` may be called again, so it is detected by
+    the one trace ``finalize`` leaves: it sets ``world_count = max(1, world_count)`` without adding
+    a world's gravity, while ``begin_world``, ``add_world`` and ``replicate`` keep
+    ``len(world_gravity) == world_count``. A builder whose entities are all global (one robot from
+    ``add_usd``, the usual case) is caught; one finalized after ``begin_world``/``replicate`` leaves
+    no trace and cannot be.
+    """
+    import newton
+
+    if not isinstance(builder, newton.ModelBuilder):
+        raise InputError(
+            f"add_envelopes_from_usd: builder: expected a newton.ModelBuilder, got {type(builder).__name__}"
+        )
+    if builder.world_count > len(builder.world_gravity):
+        raise InputError(
+            "add_envelopes_from_usd: builder: already finalized (builder.finalize() was called); the "
+            "model it made has none of the actuators added now: call add_envelopes_from_usd before finalize"
+        )
+
+
+def _check_source(source: Any) -> None:
+    if isinstance(source, (str, os.PathLike)) or hasattr(source, "GetRootLayer"):
+        return
+    raise InputError(
+        f"add_envelopes_from_usd: source: expected a USD file path (str or os.PathLike) or a Usd.Stage, "
+        f"got {type(source).__name__}"
+    )
+
+
 def _name(source: Any) -> str:
     if isinstance(source, (str, os.PathLike)):
         return os.fspath(source)
@@ -69,8 +101,6 @@ def _open(source: Any) -> Any:
 
     if isinstance(source, (str, os.PathLike)):
         return open_stage(source)
-    if not hasattr(source, "GetRootLayer"):
-        raise InputError(f"source: expected a USD file or a Usd.Stage, got {type(source).__name__}")
     return source
 
 
@@ -137,8 +167,10 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
         One record per actuator added, in stage order.
 
     Raises:
-        InputError: the file cannot be read, a stage not in SI, an acceleration drive (Newton's PD
-            is a force drive), or a drive whose joint is not in the builder.
+        InputError: ``builder`` not a ``newton.ModelBuilder`` or already finalized (see
+            ``docs/newton.md`` for what is detected), ``source`` not a path or ``Usd.Stage``, the
+            file cannot be read, a stage not in SI, an acceleration drive (Newton's PD is a force
+            drive), or a drive whose joint is not in the builder.
 
     Warns:
         EnvelopeImportWarning: an envelope on a joint outside an articulation (PhysX ignores it too).
@@ -149,6 +181,8 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
     from drive_envelope._src.adapters.newton.clamp import build
     from drive_envelope._src.adapters.usd.authoring import list_drives
 
+    _check_builder(builder)
+    _check_source(source)
     name = _name(source)
     stage = _open(source)
     _check_units(stage, name)
