@@ -370,6 +370,9 @@ def check_chunks(
         options: Thresholds.
         source: Name of the log for the report.
 
+    Returns:
+        The report; with a mapping, its ``unused_keys`` name the keys no joint of the log took.
+
     Raises:
         InputError: a joint the mapping has no envelope for; a mapping with a log without joint column;
             more than ``options.max_joints`` joints.
@@ -393,7 +396,9 @@ def check_chunks(
             else:
                 time = None if chunk.time is None else chunk.time[index]
                 joints[code].add(chunk.velocity[index], chunk.effort[index], time, index + chunk.first_row)
-    return CheckReport(source=source, joints=tuple(j.result() for j in joints.values()), options=options)
+    results = tuple(j.result() for j in joints.values())
+    unused = envelopes.unused_keys([j.joint for j in results]) if isinstance(envelopes, JointMapping) else ()
+    return CheckReport(source=source, joints=results, options=options, unused_keys=unused)
 
 
 def _share_kept_points(joints: dict[int, _Joint], options: CheckOptions) -> None:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.log_units import column_scale, split_header
+from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
 from drive_envelope._src.analysis.logs import LogColumns
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
@@ -45,22 +45,25 @@ def _split_header(cell: str) -> tuple[str, str]:
 
 
 def _find(
-    names: list[str], wanted: str, aliases: tuple[str, ...], default: str, label: str, flag: str
+    cells: list[str], wanted: str, aliases: tuple[str, ...], default: str, label: str, flag: str
 ) -> int:
-    """The one column named ``wanted`` (or, for the default name, one of its aliases)."""
-    candidates = [wanted.strip().lower()] + (list(aliases) if wanted == default else [])
-    for candidate in candidates:
-        if names.count(candidate) > 1:
-            raise InputError(f"{label}: column {candidate!r} appears {names.count(candidate)} times")
-    found = [name for name in dict.fromkeys(names) if name in candidates]
-    if len(found) > 1:
+    """The one column named ``wanted`` up to case (or, for the default name, one of its aliases)."""
+    candidates = [wanted.strip()] + (list(aliases) if wanted == default else [])
+    hits = {candidate: find_columns(cells, candidate) for candidate in candidates}
+    for candidate, found in hits.items():
+        if len(found) > 1:
+            raise InputError(f"{label}: column {candidate!r} appears {len(found)} times")
+    columns = sorted({index for found in hits.values() for index in found})
+    if len(columns) > 1:
+        names = [split_header(cells[index])[0].lower() for index in columns]
         raise InputError(
-            f"{label}: columns {', '.join(map(repr, found))} could each be the {default}; "
+            f"{label}: columns {', '.join(map(repr, names))} could each be the {default}; "
             f"name the one to use with {flag}"
         )
-    if not found:
+    if not columns:
+        names = [split_header(cell)[0].lower() for cell in cells]
         raise InputError(f"{label}: no column {wanted!r} (columns: {', '.join(names)}); name it with {flag}")
-    return names.index(found[0])
+    return columns[0]
 
 
 def read_curve(
@@ -99,9 +102,9 @@ def read_curve(
     header = [_split_header(cell) for cell in rows[0]]
     names = [name for name, _ in header]
     v_col = _find(
-        names, columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
+        rows[0], columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
     )
-    e_col = _find(names, columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
+    e_col = _find(rows[0], columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
     scales = []
     for col, role in ((v_col, "velocity"), (e_col, "effort")):
         name, unit = header[col]

@@ -1,9 +1,10 @@
 """The data model of a log and the rules every reader shares: columns, units, finite cells.
 
-A log's header is matched against :class:`LogColumns` once, by :class:`ColumnPlan`: a column named
-twice (``time,velocity,velocity,effort``), two names that differ only in case or surrounding spaces,
-or one column given two roles (``--velocity-column effort``) is an error, never a silent first pick.
-Names are compared with surrounding spaces removed, so ``time, velocity, effort`` reads as written.
+A log's header is matched against :class:`LogColumns` once, by :class:`ColumnPlan`: names are
+compared ignoring case and surrounding spaces, so ``Time, Velocity [RPM], Effort`` reads as
+``time,velocity,effort`` (:func:`~.log_units.find_columns`). A column named twice
+(``time,velocity,velocity,effort``), two names that differ only in case (``Velocity,velocity``), or
+one column given two roles (``--velocity-column effort``) is an error, never a silent first pick.
 A header may carry a unit after the name (``velocity [rpm]``, ``effort (mNm)``, see
 :mod:`.log_units`): the column is found by its name (``velocity``) or its whole text, and its values
 are converted to SI. Numbers in chunks are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.log_units import column_scale, split_header
+from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 
@@ -53,6 +54,8 @@ class LogColumns:
 
     A name finds the column of that name, or one whose header is that name and a unit
     (``velocity`` finds ``velocity [rpm]``); the whole header text (``velocity [rpm]``) works too.
+    Case does not matter (``velocity`` finds ``Velocity [RPM]``), but two columns that differ only
+    in case are an error.
     """
 
     velocity: str = "velocity"
@@ -157,24 +160,20 @@ class ColumnPlan:
         """Whether the log has a time column."""
         return "time" in self.position
 
-    def _matches(self, role: str, index: int, name: str, fold: bool) -> bool:
-        """Whether column ``index`` is ``name``: its whole header, or its name without the unit.
-
-        A joint-name column matches by its whole header only: a unit means a number column.
-        """
-        texts = [self.header[index]] if role == "joint" else [self.header[index], self.names[index]]
-        return any((text.casefold() == name.casefold()) if fold else (text == name) for text in texts)
-
     def _resolve(self, role: str, name: str, required: bool) -> None:
-        similar = [i for i in range(len(self.header)) if self._matches(role, i, name, fold=True)]
+        """Find ``role``'s column: the one header cell that is ``name`` up to case.
+
+        Its whole text or its name without the unit counts; a joint-name column matches by its
+        whole text only (a unit means a number column).
+        """
+        similar = find_columns(self.header, name, whole=role == "joint")
         if len(similar) > 1:
             found = ", ".join(f"{self.header[i]!r} (column {i + 1})" for i in similar)
             raise InputError(
                 f"{self.label}: column {name!r} is ambiguous: the header has {found}; "
                 "expected each column name once"
             )
-        exact = [i for i in similar if self._matches(role, i, name, fold=False)]
-        if not exact:
+        if not similar:
             if required:
                 columns = ", ".join(self.header) or "none"
                 raise InputError(
@@ -182,14 +181,14 @@ class ColumnPlan:
                 )
             return
         for other, position in self.position.items():
-            if position == exact[0]:
+            if position == similar[0]:
                 if not required:  # a default name (time, joint) taken by an explicit role: not used
                     return
                 raise InputError(
                     f"{self.label}: column {name!r} is named by both {_FLAGS[other]} and {_FLAGS[role]}; "
                     "expected a different column for each"
                 )
-        self.position[role] = exact[0]
+        self.position[role] = similar[0]
 
 
 class JointCodes:

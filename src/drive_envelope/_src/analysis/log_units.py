@@ -1,9 +1,13 @@
 """Units in column headers: ``speed [rpm]``, ``torque (mNm)``, read the same way by every reader.
 
 A header cell is a name and, optionally, a unit in square brackets or parentheses after it. The
-unit gives the scale to SI of every value in that column; a column without a unit is SI. The log
-readers (:mod:`.log_model`) and the curve reader (:mod:`.curve`) both use :func:`split_header` and
-:func:`column_scale`, so ``check``, ``fit`` and ``fit --from-curve`` accept the same headers.
+unit gives the scale to SI of every value in that column; a column without a unit is SI. A column
+is found by its name or its whole text up to case (:func:`find_columns`: ``Velocity [RPM]`` is the
+``velocity`` column); units keep their case, as the unit parser reads them (``RPM``, ``Rpm`` and
+``rpm`` are rpm there, while ``Ms`` and ``ms`` are different units). The log readers
+(:mod:`.log_model`), the curve reader (:mod:`.curve`) and identify's bench logs all use
+:func:`find_columns`, :func:`split_header` and :func:`column_scale`, so ``check``, ``fit``,
+``fit --from-curve`` and ``identify`` accept the same headers.
 
 SI units per role, by joint type: time [s]; position [rad or m]; velocity [rad/s or m/s]; effort
 [N*m or N]. Angles are explicit (``deg``, ``deg/s``, ``rpm``, ``rev/s``): ``1/s`` and ``Hz`` are
@@ -13,12 +17,13 @@ refused for an angular speed, as :func:`~drive_envelope._src.units.to_si` refuse
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError, UnitsError
 from drive_envelope._src.units import describe_unit, to_si
 
-__all__ = ["JOINT_TYPES", "ROLE_UNITS", "column_scale", "split_header"]
+__all__ = ["JOINT_TYPES", "ROLE_UNITS", "column_scale", "find_columns", "split_header"]
 
 JOINT_TYPES: tuple[JointType, ...] = ("revolute", "prismatic")
 """Joint types, in the order a unit is tried when the joint type is not known."""
@@ -47,6 +52,23 @@ def split_header(cell: str) -> tuple[str, str]:
         return text, ""
     unit = match.group("square") if match.group("square") is not None else match.group("round")
     return match.group("name").strip(), (unit or "").strip()
+
+
+def find_columns(header: Sequence[str], name: str, *, whole: bool = False) -> list[int]:
+    """Indices of the header cells that are ``name`` up to case (the one rule of every log reader).
+
+    A cell is ``name`` when its whole text or (unless ``whole``) its name without the unit equals
+    ``name`` ignoring case and surrounding spaces: ``velocity`` finds ``Velocity [RPM]`` and
+    ``VELOCITY``. More than one index means the column is ambiguous (``Velocity,velocity``); the
+    caller refuses that rather than pick one.
+    """
+    wanted = name.strip().casefold()
+    found = []
+    for index, cell in enumerate(header):
+        texts = [str(cell).strip()] if whole else [str(cell).strip(), split_header(cell)[0]]
+        if any(text.casefold() == wanted for text in texts):
+            found.append(index)
+    return found
 
 
 def _describe(unit: str) -> str:
@@ -88,7 +110,7 @@ def column_scale(role: str, unit: str, joint: JointType | None, where: str) -> t
         known = known or recognised
         if scale is not None:
             return scale, (None if units["revolute"] == units["prismatic"] else kind)
-    expected = " or ".join(_describe(units[kind]) for kind in dict.fromkeys(kinds))
+    expected = " or ".join(dict.fromkeys(_describe(units[kind]) for kind in kinds))
     if not known:
         raise InputError(f"{where}: unknown unit {unit!r}; expected {expected}")
     other = [

@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.mapping import UnusedKey
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -181,6 +182,8 @@ class CheckReport:
     """Per-joint results."""
     options: CheckOptions
     """The thresholds used."""
+    unused_keys: tuple[UnusedKey, ...] = ()
+    """Keys of a joint mapping that gave no joint of the log its envelope (a warning each)."""
 
     @property
     def passed(self) -> bool:
@@ -196,6 +199,7 @@ class CheckReport:
             "slack": self.options.slack,
             "limit_band": self.options.limit_band,
             "joints": [_joint_dict(j, self.options.tolerance) for j in self.joints],
+            "unused_keys": [{"key": unused.key, "reason": unused.reason} for unused in self.unused_keys],
         }
 
 

@@ -13,7 +13,7 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["format_check", "format_fit", "plot_check"]
+__all__ = ["check_warnings", "format_check", "format_fit", "plot_check"]
 
 _CURVE_TITLES = {"effort": "eq. 1 effort", "velocity": "eq. 2 velocity"}
 
@@ -60,6 +60,11 @@ def _margin_row(summary: MarginSummary) -> list[str]:
         _seconds(summary.time_on_limit),
         str(summary.samples_outside),
     ]
+
+
+def check_warnings(report: CheckReport) -> list[str]:
+    """The check's warning lines (for stderr): one per mapping key no joint of the log took."""
+    return [f"{unused.where}: {unused.reason}" for unused in report.unused_keys]
 
 
 def format_check(report: CheckReport) -> str:

@@ -156,15 +156,14 @@ def _plan(header: list[str], label: str) -> tuple[dict[str, int], dict[str, floa
     check's logs are (:func:`~drive_envelope._src.analysis.log_units.column_scale`). A name twice (up
     to case), a missing required column, a bad unit, or units of two joint types are errors.
     """
-    from drive_envelope._src.analysis.log_units import column_scale, split_header
+    from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
 
     plan: dict[str, int] = {}
     scales: dict[str, float] = {}
     split = [split_header(name) for name in header]
-    lowered = [name.lower() for name, _ in split]
     implied: dict[str, str] = {}
     for column in COLUMNS:
-        hits = [i for i, name in enumerate(lowered) if name == column]
+        hits = find_columns(header, column)  # up to case, as check's and fit's logs
         if len(hits) > 1:
             raise InputError(
                 f"{label}: column {column!r} is ambiguous: the header names it {len(hits)} times"

@@ -7,6 +7,7 @@ A map file is a TOML, JSON or YAML file with one ``[joints]`` table of pattern -
     "*_hip_joint" = "unitree-go2-hip"                      # a catalog name
     "*_thigh_joint" = "actuators/go2_thigh.toml"           # a file, relative to this map's folder
     "*_calf_joint" = { datasheet = "go2_calf.toml", instance = "angular" }
+    "*_foot_joint" = { max_effort = "12 N*m", max_actuator_velocity = "2.6 rad/s" }   # inline
 
 The format-independent part lives here, so ``usd apply --map`` and ``mujoco apply --map`` read the
 same files the same way; an engine only supplies its list of joint names (MuJoCo) or prim paths
@@ -28,8 +29,13 @@ Rules:
   a USD asset of the same robot.
 * Patterns are tried in file order; the first one that matches a joint gives its envelope.
 * Mistakes are errors naming the map file and key (``go2.toml: key 'joints.*_hip'``): a pattern
-  that matches no joint, a pattern every joint of which an earlier pattern with another source
-  already took (it would silently do nothing), a source file that does not exist, an unknown key.
+  that matches no joint (with the nearest names, a "did you mean" for a name that differs only in
+  case, and a hint when it is written as a regular expression), a pattern every joint of which an
+  earlier pattern with another source already took (it would silently do nothing), a source file
+  that does not exist, an unknown key.
+* :func:`read_entry` is the one reader of a map value; ``check``'s joint mappings
+  (:mod:`drive_envelope._src.analysis.mapping`) read their values with it too, and
+  :func:`glob_hint` is their hint for a key written as a regular expression.
 * A joint that two patterns with different sources match gets a warning (first match wins).
 """
 
@@ -38,27 +44,38 @@ from __future__ import annotations
 import difflib
 import fnmatch
 import os
+import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.values import nearest_key
 
 __all__ = [
     "JointMap",
     "MapEntry",
     "MapMatch",
     "MappedJoint",
+    "case_hint",
+    "glob_hint",
     "keyed_error",
     "match_joints",
+    "read_entry",
     "read_map",
+    "read_map_table",
     "resolve_envelopes",
 ]
 
 _FILE_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 _SHOWN = 3  # joint names quoted in one message
+_SOURCE_KEYS = ("envelope", "datasheet")
+_ENVELOPE_KEYS = ("name", "joint", *ENVELOPE_FIELDS)  # an envelope file's keys (envelope_from_mapping)
+_TABLE_KEYS = (*_SOURCE_KEYS, "instance", *_ENVELOPE_KEYS)
+# what only a regular expression means: .* .+ \d ... + { } ^ $ | ( ); globs know * ? [...] only
+_REGEX = re.compile(r"\.[*+]|\\|[+{}^$|()]")
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -68,7 +85,10 @@ class MapEntry:
     pattern: str
     """Glob on joint names or prim paths (see the module docstring)."""
     source: str
-    """Envelope file or datasheet file (absolute when found relative to the map), or catalog name."""
+    """Envelope file or datasheet file (absolute when found relative to the map), or catalog name;
+    ``""`` for an inline envelope."""
+    envelope: PerformanceEnvelope | None = None
+    """The inline envelope (SI, joint side) of a table of envelope keys, else None."""
     instance: str | None = None
     """Drive instance (USD: ``angular``, ``linear``, ``rotX`` ...), or None for the joint's default."""
     where: str = ""
@@ -113,11 +133,8 @@ def read_map(path: str | os.PathLike[str]) -> JointMap:
     """Read a map file (TOML/JSON/YAML) with one ``[joints]`` table of pattern -> envelope source.
 
     ``path`` may also name a robot map shipped with the package (``"unitree-go2"``,
-    ``"franka-fr3"``: ``drive_envelope/maps/``) when no such file exists.
-
-    Each value is a source string, or a table with exactly one of ``envelope`` / ``datasheet`` and
-    an optional ``instance``. A source names an envelope file, a datasheet file (looked up relative
-    to the map's folder first, then the current folder) or a catalog actuator.
+    ``"franka-fr3"``: ``drive_envelope/maps/``) when no such file exists. Each value is read by
+    :func:`read_entry`.
 
     Example::
 
@@ -129,9 +146,21 @@ def read_map(path: str | os.PathLike[str]) -> JointMap:
             unknown key, an empty pattern, a value of the wrong type or a source file that does not
             exist, naming the key.
     """
+    path = _map_file(path)
+    name = os.fspath(path)
+    base = Path(path).parent
+    entries = tuple(read_entry(pattern, value, base, name) for pattern, value in read_map_table(path).items())
+    return JointMap(path=name, entries=entries)
+
+
+def read_map_table(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``[joints]`` table of a map file, keys as strings, in file order (values unread).
+
+    Raises:
+        InputError: an unreadable file, a key other than ``joints``, or no (or an empty) table.
+    """
     from drive_envelope._src.io.files import read_mapping
 
-    path = _map_file(path)
     name = os.fspath(path)
     data = read_mapping(path)
     unknown = [key for key in data if key != "joints"]
@@ -144,9 +173,7 @@ def read_map(path: str | os.PathLike[str]) -> JointMap:
         raise InputError(
             f"{name}: missing [joints] table of joint pattern -> envelope file, datasheet or catalog name"
         )
-    base = Path(path).parent
-    entries = tuple(_entry(str(pattern), value, base, name) for pattern, value in joints.items())
-    return JointMap(path=name, entries=entries)
+    return {str(key): value for key, value in joints.items()}
 
 
 def _map_file(path: str | os.PathLike[str]) -> str | os.PathLike[str]:
@@ -162,28 +189,63 @@ def _map_file(path: str | os.PathLike[str]) -> str | os.PathLike[str]:
         raise InputError(f"{name}: no such map file, and {exc}") from None
 
 
-def _entry(pattern: str, value: Any, base: Path, name: str) -> MapEntry:
+def read_entry(pattern: str, value: Any, base: Path, name: str) -> MapEntry:
+    """One value of a map's ``[joints]`` table: a source, or a table of a source or an inline envelope.
+
+    A value is a string (an envelope file, a datasheet file or a catalog name), or a table holding
+    either exactly one of ``envelope`` / ``datasheet``, or the keys of an envelope file
+    (``max_effort``, ``max_actuator_velocity``, ``velocity_dependent_resistance``,
+    ``speed_effort_gradient``, ``name``, ``joint``; SI numbers, ``"inf"`` or strings with units), and
+    in both cases an optional ``instance``.
+
+    Args:
+        pattern: The key (joint name, path or glob).
+        value: The value as read from the file.
+        base: Folder a relative file name is looked up in first (the map's), then the current folder.
+        name: The map file, for messages.
+
+    Raises:
+        InputError: an empty pattern, an unknown key, both a source and envelope keys, a bad
+            instance, a bad inline value, a missing source file, naming ``name`` and the key.
+    """
     where = f"{name}: key 'joints.{pattern}'"
     if not pattern.strip():
         raise InputError(f"{where}: expected a joint name or path pattern, got an empty key")
     instance = None
     if isinstance(value, Mapping):
-        for key in value:
-            if key not in ("envelope", "datasheet", "instance"):
-                raise InputError(f"{where}: unknown key {key!r}; expected envelope, datasheet or instance")
-        sources = [value[key] for key in ("envelope", "datasheet") if key in value]
-        if len(sources) != 1:
+        keys = [str(key) for key in value]
+        for key in keys:
+            if key not in _TABLE_KEYS:
+                raise InputError(
+                    f"{where}: unknown key {key!r}{nearest_key(key, _TABLE_KEYS)}; expected envelope, "
+                    f"datasheet or an inline envelope ({', '.join(_ENVELOPE_KEYS)}), and optionally instance"
+                )
+        sources = [key for key in _SOURCE_KEYS if key in keys]
+        inline = [key for key in keys if key in _ENVELOPE_KEYS]
+        if sources and inline:
             raise InputError(
-                f"{where}: expected exactly one of 'envelope' or 'datasheet', got {dict(value)!r}"
+                f"{where}: key {sources[0]!r} with inline envelope key(s) {', '.join(map(repr, inline))}; "
+                "expected either a source (envelope or datasheet) or an inline envelope"
+            )
+        if len(sources) > 1 or not (sources or inline):
+            raise InputError(
+                f"{where}: expected exactly one of 'envelope' or 'datasheet', or an inline envelope "
+                f"(max_effort, ...), got {dict(value)!r}"
             )
         instance = value.get("instance")
         if instance is not None and (not isinstance(instance, str) or not instance.strip()):
             raise InputError(
                 f"{where}: key 'instance': expected a string such as 'angular', got {instance!r}"
             )
-        value = sources[0]
+        if inline:
+            envelope = envelope_from_mapping({key: value[key] for key in inline}, source=where)
+            return MapEntry(pattern=pattern, source="", envelope=envelope, instance=instance, where=where)
+        value = value[sources[0]]
     if not isinstance(value, str) or not value.strip():
-        raise InputError(f"{where}: expected an envelope file, datasheet file or catalog name, got {value!r}")
+        raise InputError(
+            f"{where}: expected an envelope file, datasheet file or catalog name, got {value!r} "
+            "(or a table: an inline envelope such as { max_effort = '12 N*m' }, or envelope/datasheet)"
+        )
     return MapEntry(pattern=pattern, source=_source(value, base, where), instance=instance, where=where)
 
 
@@ -209,16 +271,44 @@ def _names(joints: Sequence[str]) -> str:
     return shown + (f" and {len(joints) - _SHOWN} more" if len(joints) > _SHOWN else "")
 
 
+def glob_hint(pattern: str) -> str:
+    """``"; patterns are globs ..."`` when ``pattern`` holds regular-expression syntax, else ``""``.
+
+    Regular-expression syntax is ``.*``, ``.+``, a backslash, ``+``, ``{``, ``}``, ``^``, ``$``,
+    ``|``, ``(`` or ``)``: a glob has no such operators, so ``"elbow_.*"`` matches only a name with
+    a literal ``.`` after ``elbow_``.
+    """
+    if not _REGEX.search(pattern):
+        return ""
+    return "; patterns are globs (*, ?, [...]), not regular expressions (write 'elbow_*', not 'elbow_.*')"
+
+
+def case_hint(pattern: str, names: Sequence[str]) -> str:
+    """``"; did you mean ..."`` naming the ``names`` that ``pattern`` matches only up to case, else ``""``.
+
+    Matching is case-sensitive (:func:`fnmatch.fnmatchcase`); this says when case is what is wrong.
+    """
+    folded = pattern.casefold()
+    close = [name for name in dict.fromkeys(names) if fnmatch.fnmatchcase(name.casefold(), folded)]
+    if not close:
+        return ""
+    return f"; did you mean {_names(close)}? (names are case-sensitive)"
+
+
 def _no_match(entry: MapEntry, joints: Sequence[str]) -> InputError:
     subjects = sorted({_subject(entry.pattern, joint) for joint in joints})
-    close = difflib.get_close_matches(entry.pattern, subjects, n=_SHOWN, cutoff=0.5)
-    hint = f"; close: {', '.join(repr(c) for c in close)}" if close else ""
+    hint = case_hint(entry.pattern, subjects)
+    if not hint:
+        close = difflib.get_close_matches(entry.pattern, subjects, n=_SHOWN, cutoff=0.5)
+        hint = f"; close: {', '.join(repr(c) for c in close)}" if close else ""
     what = "joint path" if "/" in entry.pattern else "joint name (the part after the last '/')"
-    return InputError(f"{entry.where}: matches no {what} of the {len(joints)} joints{hint}")
+    return InputError(
+        f"{entry.where}: matches no {what} of the {len(joints)} joints{hint}{glob_hint(entry.pattern)}"
+    )
 
 
 def _same_source(a: MapEntry, b: MapEntry) -> bool:
-    return (a.source, a.instance) == (b.source, b.instance)
+    return (a.source, a.envelope, a.instance) == (b.source, b.envelope, b.instance)
 
 
 def match_joints(joint_map: JointMap, joints: Sequence[str]) -> MapMatch:
@@ -286,13 +376,16 @@ def resolve_envelopes(match: MapMatch) -> list[MappedJoint]:
 
     Raises:
         InputError: a source that is not an envelope file, a datasheet or a catalog name, with the
-            map key in front of the resolver's message.
+            map key in front of the resolver's message. An inline envelope is used as read.
     """
     from drive_envelope._src.datasheet.resolve import resolve_envelope
 
     cache: dict[str, PerformanceEnvelope] = {}
     resolved = []
     for item in match.joints:
+        if item.entry.envelope is not None:  # inline: read with the map
+            resolved.append(replace(item, envelope=item.entry.envelope))
+            continue
         source = item.entry.source
         if source not in cache:
             cache[source] = resolve_envelope(

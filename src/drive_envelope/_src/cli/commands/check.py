@@ -74,8 +74,8 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.api import check_log
     from drive_envelope._src.analysis.check import CheckOptions
     from drive_envelope._src.analysis.options import columns_from_args
-    from drive_envelope._src.analysis.text import format_check, plot_check
-    from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.analysis.text import check_warnings, format_check, plot_check
+    from drive_envelope._src.cli.common import checked_output, status, warn
     from drive_envelope._src.plots.figure import check_figure_path
 
     if checked_output(args.plot, "--plot") is not None:
@@ -88,6 +88,8 @@ def _run(args: argparse.Namespace) -> int:
         max_joints=args.max_joints,
     )
     report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
+    for message in check_warnings(report):  # mapping keys no joint of the log took
+        warn(message)
     if args.plot:
         written = plot_check(report, args.plot, force=args.force)
     if args.format == "json":
