@@ -171,7 +171,11 @@ def test_implicit_solve_cannot_brake_from_exactly_the_speed_limit() -> None:
         "simulation": {"solver": "pgs", "dt": 1 / 120, "duration": 0.75},
     }
     scenario = scenario_from_mapping(data, source="stuck")
-    run, ref = simulate(scenario, "newton"), simulate(scenario, "reference")
+    from drive_envelope._src.errors import EngineWarning
+
+    with pytest.warns(EngineWarning, match=r"let the drive go in 50 step\(s\)"):
+        run = simulate(scenario, "newton")
+    ref = simulate(scenario, "reference")
     at_limit = int(np.argmax(run.velocity == np.float32(0.5)))
     assert at_limit > 0
     np.testing.assert_allclose(run.velocity[: at_limit + 1], ref.velocity[: at_limit + 1], atol=1e-5)
@@ -230,3 +234,41 @@ def test_cli_simulate_with_newton_engine_keeps_stdout_clean(
     assert main(["simulate", str(PGS_FILES[0]), "--engine", "newton"]) == 0
     lines = capfd.readouterr().out.splitlines()
     assert lines[0] == "time,position,velocity,effort" and all(line[0].isdigit() for line in lines[1:])
+
+
+def test_a_drive_let_go_beyond_the_speed_line_is_a_warning() -> None:
+    """From rest, a load that alone would pass max_actuator_velocity in one step: Newton's p = 0 root.
+
+    10 N*m on 0.001 kg*m^2 for 5 ms gives 50 rad/s, beyond the AK80-6's 37.7 rad/s: Newton lets the
+    drive go at the first step, where PhysX and the reference brake and hold the joint; from the
+    next step on the joint is too fast for any braking within the envelope (PhysX would let go too),
+    so one step is counted, in one EngineWarning.
+    """
+    from drive_envelope._src.errors import EngineWarning
+
+    data = {
+        "joint": {"inertia": 0.001},
+        "drive": {"stiffness": 50.0, "damping": 2.0},
+        "envelope": {"datasheet": "tmotor-ak80-6"},
+        "load": {"external_effort": -10.0},
+        "simulation": {"solver": "pgs", "dt": 0.005, "duration": 0.1, "position_iterations": 1,
+                       "velocity_iterations": 0},
+    }  # fmt: skip
+    scenario = scenario_from_mapping(data, source="runaway")
+    with pytest.warns(EngineWarning, match=r"let the drive go in 1 step\(s\), first at t = 0\.005 s"):
+        run = simulate(scenario, "newton")
+    ref = simulate(scenario, "reference")
+    assert np.all(run.effort[1:] == 0.0) and abs(run.velocity[-1]) > 100.0
+    assert np.abs(ref.velocity).max() < 37.7 and abs(ref.velocity[-1]) < 1.0  # braked and held
+    assert np.all(ref.effort[1:] > 5.0)
+
+
+@pytest.mark.parametrize("file", PGS_FILES, ids=lambda p: p.stem)
+def test_runs_that_agree_with_physx_draw_no_warning(file: Path) -> None:
+    import warnings
+
+    from drive_envelope._src.errors import EngineWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EngineWarning)
+        simulate(load_scenario(file), "newton")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["DriveEnvelopeError", "InputError", "UnitsError"]
+__all__ = ["DriveEnvelopeError", "EngineWarning", "InputError", "UnitsError"]
 
 
 class DriveEnvelopeError(Exception):
@@ -15,3 +15,7 @@ class InputError(DriveEnvelopeError, ValueError):
 
 class UnitsError(InputError):
     """A quantity with an unknown unit or a unit of the wrong dimension."""
+
+
+class EngineWarning(UserWarning):
+    """An engine ran, but where it is known to part from PhysX (the CLI prints it as a warning line)."""

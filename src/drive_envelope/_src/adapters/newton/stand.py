@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
-from drive_envelope._src.errors import InputError
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.errors import EngineWarning, InputError
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
@@ -198,6 +198,7 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
     dt = scenario.simulation.dt
     position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
     position[0], velocity[0] = scenario.joint.initial_position, scenario.joint.initial_velocity
+    let_go = _LetGo(scenario)
     for i in range(1, count + 1):
         control.joint_f.zero_()
         response.refresh(state_in)
@@ -214,8 +215,10 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
                 f"{_where(scenario)}: Newton's state diverged at step {i} (t = {i * dt:.6g} s): "
                 "check dt, inertia, gains and loads"
             )
+        let_go.see(i, position[i], velocity[i], effort[i])
         if progress is not None and (i % 1000 == 0 or i == count):
             progress(i, count)
+    let_go.report(dt)
     return Trajectory(
         time=np.arange(count + 1, dtype=np.float64) * dt,
         position=position,
@@ -226,6 +229,76 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
         name=scenario.name,
         metadata=_metadata(scenario),
     )
+
+
+class _LetGo:
+    """Counts the steps where Newton's implicit solve let the drive go beyond the speed line.
+
+    Newton solves ``p = dt * clip(drive(v(p)), -L(v(p)), L(v(p)))``: when the step without drive
+    effort would end beyond the speed line, ``p = 0`` solves it and the solve stops there, where
+    PhysX's ``clampDriveImpulse`` brakes whenever braking makes the step feasible
+    (docs/newton.md). A step counts when the effort is 0, the joint ends with no feasible effort,
+    and a braking effort the drive law asks for would have been feasible (:func:`_can_brake`); one
+    :class:`EngineWarning` says how many. Where PhysX lets go too (a load that no braking within
+    the envelope can hold), nothing is counted.
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.envelope = scenario.effective_envelope()
+        self.response = scenario.simulation.dt / scenario.effective_inertia  # [rad/s per N*m]
+        self.steps = 0
+        self.first = 0
+
+    def see(self, step: int, position: float, velocity: float, effort: float) -> None:
+        envelope = self.envelope
+        if envelope is None or effort != 0.0 or float(envelope.effort_limit(velocity)) != 0.0:
+            return
+        drive = self.scenario.drive
+        request = drive.stiffness * (drive.target_position - position)
+        request += drive.damping * (drive.target_velocity - velocity)
+        if request * velocity < 0.0 and _can_brake(envelope, abs(velocity), self.response, abs(request)):
+            self.steps += 1
+            self.first = self.first or step
+
+    def report(self, dt: float) -> None:
+        if self.steps:
+            import warnings
+
+            warnings.warn(
+                f"{_where(self.scenario)}: Newton's implicit solve let the drive go in {self.steps} "
+                f"step(s), first at t = {self.first * dt:.6g} s, with the joint beyond its speed line "
+                "and the drive asking to brake; PhysX brakes there when braking makes the step "
+                "feasible (a limit of Newton 1.8's implicit effort mode, see docs/newton.md): compare "
+                "with --engine reference",
+                EngineWarning,
+                stacklevel=3,
+            )
+
+
+def _can_brake(envelope: PerformanceEnvelope, speed: float, response: float, request: float) -> bool:
+    """Whether some braking effort ``0 < e <= request`` is feasible at the speed it leaves, ``speed - r*e``.
+
+    Each line of the envelope is ``e <= a - b*s`` at speed ``s`` (eq. 1: ``a = max_effort``,
+    ``b = R``; eq. 2: ``a = v_max/G``, ``b = 1/G``); at ``s = speed - r*e`` it reads
+    ``(b*r - 1)*e >= b*speed - a``. ``speed`` [rad/s or m/s], ``response`` ``r`` [(rad/s)/(N*m)].
+    """
+    low, high = 0.0, request
+    lines = [(envelope.max_effort, envelope.velocity_dependent_resistance)]
+    if envelope.speed_effort_gradient > 0.0 and math.isfinite(envelope.max_actuator_velocity):
+        gradient = envelope.speed_effort_gradient
+        lines.append((envelope.max_actuator_velocity / gradient, 1.0 / gradient))
+    elif math.isfinite(envelope.max_actuator_velocity) and speed > envelope.max_actuator_velocity:
+        low = max(low, (speed - envelope.max_actuator_velocity) / response)  # back on the speed limit
+    for a, b in lines:
+        slope, need = b * response - 1.0, b * speed - a
+        if slope > 0.0:
+            low = max(low, need / slope)
+        elif slope < 0.0:
+            high = min(high, need / slope)
+        elif need > 0.0:
+            return False
+    return 0.0 < high and low <= high
 
 
 def _metadata(scenario: Scenario) -> dict[str, object]:

@@ -64,8 +64,10 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import Progress, checked_output, status
-    from drive_envelope._src.errors import InputError
+    import warnings
+
+    from drive_envelope._src.cli.common import Progress, checked_output, status, warn
+    from drive_envelope._src.errors import EngineWarning, InputError
     from drive_envelope._src.scenario.spec import load_scenario
     from drive_envelope._src.scenario.trajectory import (
         save_trajectory,
@@ -89,12 +91,17 @@ def _run(args: argparse.Namespace) -> int:
     _say_rounded_duration(scenario.simulation.duration, scenario.simulation.dt, steps)
     engine_module(args.engine)  # a missing extra is reported as such, not as a problem of the file
     progress = Progress(f"simulate {args.engine}")
-    try:
-        trajectory = simulate(scenario, args.engine, max_steps=args.max_steps, progress=progress)
-    except InputError as exc:  # the run failed on this file's values: say which file
-        raise InputError(f"{args.file}: {exc}") from None
-    finally:
-        progress.close()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", EngineWarning)
+        try:
+            trajectory = simulate(scenario, args.engine, max_steps=args.max_steps, progress=progress)
+        except InputError as exc:  # the run failed on this file's values: say which file
+            raise InputError(f"{args.file}: {exc}") from None
+        finally:
+            progress.close()
+    for item in caught:  # where an engine is known to part from PhysX on this run
+        if issubclass(item.category, EngineWarning):
+            warn(str(item.message))
     if output is None:
         writer = write_trajectory_json if chosen == "json" else write_trajectory_csv
         writer(trajectory, sys.stdout)
