@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import importlib.util
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -225,3 +226,58 @@ def test_a_usd_joint_path_with_a_typo_names_the_nearest_joints() -> None:
         InputError, match=r"'/Zzz': no such prim .*; it has 2 joint\(s\), e\.g\. '/Robot/Arm/RevoluteJoint'"
     ):
         resolve_joint(stage, "/Zzz")
+
+
+# --- round 3: simulate's JSON as a log, notes on derived envelopes, plot warnings ------------------
+
+
+def test_check_and_fit_read_simulates_json_trajectory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "run.json"
+    assert main(["simulate", str(CORPUS / "scenario.toml"), "-o", str(run)]) == 0
+    csv = tmp_path / "run.csv"
+    assert main(["simulate", str(CORPUS / "scenario.toml"), "-o", str(csv)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(ENVELOPE), str(run), "--json"]) in (0, 1)
+    from_json = json.loads(capsys.readouterr().out)["joints"][0]
+    assert main(["check", str(ENVELOPE), str(csv), "--json"]) in (0, 1)
+    from_csv = json.loads(capsys.readouterr().out)["joints"][0]
+    assert from_json["samples"] == from_csv["samples"] == 11
+    assert from_json["effort"] == from_csv["effort"] and from_json["duration"] == from_csv["duration"]
+
+
+def test_derive_notes_a_speed_line_below_max_effort() -> None:
+    """CubeMars AK70-10: max_actuator_velocity / speed_effort_gradient = 23.4 N*m < max_effort 24.8."""
+    result = derive(load_catalog_datasheet("cubemars-ak70-10"))
+    env = result.envelope
+    stall = env.max_actuator_velocity / env.speed_effort_gradient
+    assert stall < env.max_effort == pytest.approx(24.8)
+    (note,) = [n for n in result.notes if n.startswith("the speed line reaches zero speed")]
+    assert f"{stall:.6g} N*m" in note and "no operating point reaches max_effort" in note
+
+
+def test_derive_notes_a_default_modulation_below_a_printed_speed() -> None:
+    """AK80-6: 100 rpm/V * 24 V * 0.9 / 6 = 37.699 rad/s, below the printed 38.2 rad/s output rating."""
+    result = derive(load_catalog_datasheet("tmotor-ak80-6"))
+    assert result.envelope.max_actuator_velocity == pytest.approx(
+        100 * 2 * 3.141592653589793 / 60 * 24 * 0.9 / 6
+    )
+    assert any("below the printed output_rating 38.2 rad/s" in note for note in result.notes)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("matplotlib") is None, reason="needs matplotlib")
+def test_a_glyph_the_font_lacks_is_one_warning_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plot", "tmotor-ak80-6", "--title", "AK 日", "-o", str(tmp_path / "t.svg")]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    (line,) = [line for line in lines if "Glyph" in line]  # once, without matplotlib's source line
+    assert line.startswith("drive-envelope: warning: Glyph 26085 (") and "missing from font" in line
+
+
+def test_load_envelope_of_a_catalog_name_points_to_the_resolver() -> None:
+    from drive_envelope import load_envelope
+
+    with pytest.raises(InputError, match=r"'tmotor-ak80-6': no such envelope file; .*resolve_envelope"):
+        load_envelope("tmotor-ak80-6")

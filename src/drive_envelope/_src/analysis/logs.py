@@ -94,6 +94,8 @@ def iter_log(
             raise InputError(f"{label}: no such file")
         if path.suffix.lower() in _PARQUET_SUFFIXES:
             chunks = iter_parquet(path, columns, chunk_rows, label)
+        elif path.suffix.lower() == ".json":  # simulate's JSON trajectory (SI, standard column names)
+            chunks = iter_table(_json_trajectory(path), columns, chunk_rows, label)
         elif _use_pyarrow(engine):
             chunks = iter_csv_arrow(path, columns, chunk_rows, label)
         else:
@@ -107,6 +109,17 @@ def iter_log(
             yield chunk
     if empty:
         raise InputError(f"{label}: the log has no data rows (expected a header line and rows of numbers)")
+
+
+def _json_trajectory(path: Path) -> dict[str, Any]:
+    """The ``time``, ``velocity`` and ``effort`` columns of a JSON trajectory (``simulate -o run.json``)."""
+    from drive_envelope._src.scenario.trajectory import read_operating_log
+
+    run = read_operating_log(path)
+    table: dict[str, Any] = {"velocity": run.velocity, "effort": run.effort}
+    if run.time is not None:
+        table["time"] = run.time
+    return table
 
 
 def read_log(source: Any, columns: LogColumns | None = None, *, engine: ReadEngine = "auto") -> LogChunk:

@@ -17,7 +17,9 @@ in as described in :class:`~drive_envelope._src.datasheet.spec.Transmission`.
 
 from __future__ import annotations
 
-from drive_envelope._src.datasheet.context import build_context
+import math
+
+from drive_envelope._src.datasheet.context import DeriveContext, build_context
 from drive_envelope._src.datasheet.gradient import GRADIENT_METHODS, choose_gradient, line_fit
 from drive_envelope._src.datasheet.limits import (
     EFFORT_HINT,
@@ -96,6 +98,7 @@ def derive(
         velocity_dependent_resistance=resistance_value,
         speed_effort_gradient=gradient,
     )
+    ctx.notes.extend(_envelope_notes(envelope, velocity, velocity_by, ctx))
     ctx.provenance["max_effort"] = limit_source(ctx, effort_by, "gear_torque")
     ctx.provenance["max_actuator_velocity"] = limit_source(ctx, velocity_by, None)
     fit = line_fit(ctx, method, velocity, velocity_by, max_effort) if approximate_line else None
@@ -115,3 +118,36 @@ def derive(
         warnings=tuple(plausibility_warnings(ctx)),
         line_fit=fit,
     )
+
+
+def _envelope_notes(
+    envelope: PerformanceEnvelope, velocity: list[Candidate], velocity_by: str, ctx: DeriveContext
+) -> list[str]:
+    """What the derived numbers imply that a reader of the datasheet would not expect.
+
+    * The speed line reaches zero speed below max_effort (``v_max / G < max_effort``): no operating
+      point reaches max_effort; the line decides the stall effort.
+    * The voltage limit binds only because of the default modulation mu_C = 0.9, below a printed
+      speed (an output rating or no-load speed).
+    """
+    notes = []
+    unit = ctx.units["joint_effort"]
+    gradient, top = envelope.speed_effort_gradient, envelope.max_actuator_velocity
+    if gradient > 0.0 and math.isfinite(top) and top / gradient < envelope.max_effort:
+        stall = top / gradient
+        notes.append(
+            f"the speed line reaches zero speed at {stall:.6g} {unit} (max_actuator_velocity / "
+            f"speed_effort_gradient), below max_effort = {envelope.max_effort:.6g} {unit}: no operating "
+            "point reaches max_effort"
+        )
+    if velocity_by == "voltage" and ctx.provenance.get("controller.modulation") == "default":
+        printed = [c for c in velocity if c.name.startswith("output") and c.value is not None]
+        for c in printed:
+            if c.value is not None and c.value > envelope.max_actuator_velocity:
+                speed_unit = ctx.units["joint_speed"]
+                notes.append(
+                    f"the voltage limit with the default mu_C = 0.9 ({envelope.max_actuator_velocity:.6g} "
+                    f"{speed_unit}) is below the printed {c.name} {c.value:.6g} {speed_unit}: give "
+                    "controller.modulation = 1 if the datasheet's speed is at full duty"
+                )
+    return notes

@@ -24,6 +24,12 @@ def load_envelope(path: str | os.PathLike[str]) -> PerformanceEnvelope:
     Raises:
         InputError: a one-line message naming the file, the key and what was expected.
     """
+    file = Path(path)
+    if not file.suffix and not file.exists():
+        raise InputError(
+            f"{str(path)!r}: no such envelope file; a catalog name or datasheet is read by "
+            "drive_envelope.datasheet.resolve_envelope (the command line takes either)"
+        )
     return PerformanceEnvelope.from_dict(read_mapping(path), source=str(path))
 
 

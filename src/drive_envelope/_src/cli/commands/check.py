@@ -27,7 +27,11 @@ def register(subparsers: Any) -> None:
         metavar="ENVELOPE_OR_DATASHEET",
         help="envelope file, datasheet file, catalog actuator name, or a joint mapping file ([joints] table)",
     )
-    parser.add_argument("log", metavar="LOG", help="log file: .csv, .tsv, .txt (optionally .gz), .parquet")
+    parser.add_argument(
+        "log",
+        metavar="LOG",
+        help="log file: .csv, .tsv, .txt (optionally .gz), .parquet, or a simulate .json trajectory",
+    )
     add_column_arguments(parser)
     parser.add_argument(
         "--tolerance",

@@ -32,7 +32,12 @@ def register(subparsers: Any) -> None:
         ),
     )
     source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument("log", nargs="?", metavar="LOG", help="log of saturated operation (.csv or .parquet)")
+    source.add_argument(
+        "log",
+        nargs="?",
+        metavar="LOG",
+        help="log of saturated operation (.csv, .parquet, or a simulate .json trajectory)",
+    )
     source.add_argument(
         "--from-curve",
         metavar="POINTS",

@@ -47,7 +47,9 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import checked_output, status
+    import warnings
+
+    from drive_envelope._src.cli.common import checked_output, status, warn
     from drive_envelope._src.plots.curve import OperatingPoints
     from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
@@ -70,8 +72,12 @@ def _run(args: argparse.Namespace) -> int:
                 label=plain_text(label),  # a name from a file is text, never mathtext
             )
         )
-    handle = plot_envelope(envelope, points=points or None, title=_title(args.title))
-    save_figure(handle, output, dpi=args.dpi, force=args.force)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        handle = plot_envelope(envelope, points=points or None, title=_title(args.title))
+        save_figure(handle, output, dpi=args.dpi, force=args.force)
+    for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
+        warn(message)  # matplotlib's (a glyph the font lacks, drawn as a box): one line each, no source
     status(f"wrote {output}")
     return 0
 
