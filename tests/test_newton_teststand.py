@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _edge_scenarios import EDGE_CASES
 from drive_envelope.errors import InputError
 from drive_envelope.teststand import Scenario, Trajectory, load_scenario, scenario_from_mapping, simulate
 
@@ -49,50 +50,11 @@ def test_pgs_example_scenarios_agree_with_reference_every_step(file: Path) -> No
 
 
 CASES: dict[str, dict[str, Any]] = {
+    **EDGE_CASES,
+    # the same prismatic drive stopping short of its speed limit (Newton cannot brake from it: below)
     "prismatic_acceleration_drive": {
-        "joint": {"type": "prismatic", "inertia": 2.0},
-        "drive": {
-            "type": "acceleration",
-            "stiffness": 400.0,
-            "damping": 30.0,
-            "target_position": 0.05,  # brakes before reaching the speed limit: see the test below
-            "max_effort": 50,
-        },
-        "envelope": {
-            "max_actuator_velocity": 0.5,
-            "velocity_dependent_resistance": 20.0,
-            "speed_effort_gradient": 0.002,
-        },
-    },
-    "applied_and_external_effort": {
-        "joint": {"type": "revolute", "inertia": 0.02, "initial_velocity": -2.0},
-        "drive": {
-            "stiffness": 50.0,
-            "damping": 1.0,
-            "target_position": -1.0,
-            "target_velocity": 0.5,
-            "max_effort": 4,
-        },
-        "envelope": {
-            "max_actuator_velocity": 6.0,
-            "velocity_dependent_resistance": 0.3,
-            "speed_effort_gradient": 0.2,
-        },
-        "load": {"applied_effort": 1.5, "external_effort": -0.8},
-    },
-    "stiff_step_plain_drive": {
-        "joint": {"type": "revolute", "inertia": 0.01},
-        "drive": {"stiffness": 5000.0, "damping": 10.0, "target_position": 1.0, "max_effort": 20},
-        "load": {"applied_effort": 5.0},
-    },
-    "drive_off_applied_only": {
-        "joint": {"type": "revolute", "inertia": 0.1},
-        "drive": {"stiffness": 10.0, "damping": 1.0, "target_position": 1.0, "max_effort": 0},
-        "load": {"applied_effort": 0.7},
-    },
-    "unlimited_drive": {
-        "joint": {"type": "prismatic", "inertia": 1.0},
-        "drive": {"stiffness": 100.0, "damping": 5.0, "target_position": -0.3},
+        **EDGE_CASES["prismatic_acceleration_drive"],
+        "drive": {**EDGE_CASES["prismatic_acceleration_drive"]["drive"], "target_position": 0.05},
     },
     "pendulum_with_armature": {
         "joint": {"type": "revolute", "inertia": 0.02, "armature": 0.01, "initial_position": 1.0},
