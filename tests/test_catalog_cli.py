@@ -50,10 +50,10 @@ def test_search_unitree_finds_every_unitree_entry(capsys: pytest.CaptureFixture[
 
 
 def test_listing_shows_the_derived_envelope(capsys: pytest.CaptureFixture[str]) -> None:
-    """The JSON list carries the derived numbers: the Go2 calf is 35.55 N*m, 20.07 rad/s (Unitree URDF)."""
+    """The JSON list carries the derived numbers: the Go2 calf is 45.43 N*m, 15.70 rad/s (Unitree URDF)."""
     _, out, _ = run(capsys, "catalog", "--search", "go2 calf", "--json")
     (item,) = json.loads(out)
-    assert item["max_effort"] == 35.55 and item["max_actuator_velocity"] == 20.07
+    assert item["max_effort"] == 45.43 and item["max_actuator_velocity"] == 15.70
     assert item["sources"] and all(url.startswith("https://") for url in item["sources"])
 
 

@@ -96,7 +96,7 @@ EXPECTED: dict[str, Expected] = {
     "robstride-el05": Expected(6, 430 * RPM, 0.0, "output_rating", "output_no_load"),  # "Peak load: 6 N.m"
     # Unitree unitree_ros descriptions: <limit effort=... velocity=...>
     "unitree-go-m8010-6": caps(23.7, 30.1),  # go2 FL_hip_joint effort="23.7" velocity="30.1"
-    "unitree-go2-calf": caps(35.55, 20.07),  # go2 FL_calf_joint effort="35.55" velocity="20.07"
+    "unitree-go2-calf": caps(45.43, 15.70),  # go2 FL_calf_joint effort="45.43" velocity="15.70" (79f054ec on)
     "unitree-go1-joint": caps(23.7, 30.1),  # go1 hip_torque_max 23.7, hip_velocity_max 30.1
     "unitree-a1-motor": caps(33.5, 21.0),  # a1 hip_torque_max 33.5, hip_velocity_max 21
     "unitree-g1-7520-14": caps(88, 32),  # g1_29dof left_hip_pitch_joint effort="88" velocity="32"

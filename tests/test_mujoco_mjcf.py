@@ -208,7 +208,7 @@ def test_equipping_the_menagerie_go2_is_one_command(mujoco: Any, tmp_path: Path)
     model = mujoco.MjModel.from_xml_path(str(out))
     drives = model_drives(model)
     assert len(drives) == 12 and model.nu == 12
-    assert {d.envelope.max_effort for d in drives if d.envelope} == {23.7, 35.55}
+    assert {d.envelope.max_effort for d in drives if d.envelope} == {23.7, 45.43}
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, 0)
     for _ in range(500):  # stand on the floor holding the keyframe pose
