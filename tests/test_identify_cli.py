@@ -64,7 +64,7 @@ def bench(tmp_path: Path) -> tuple[Path, list[Path]]:
     stand = tmp_path / "stand.toml"
     stand.write_text(STAND, encoding="utf-8")
     setup = read_stand(stand)
-    truth = {"max_effort": 0.45, "damping": 0.025, "static_friction": 0.03}
+    truth = {"max_effort": 0.45, "duty_effort": 0.45, "damping": 0.025, "static_friction": 0.03}
     t = np.arange(301) * 0.005
     paths = []
     for i, target in enumerate((0.8 * np.sin(2 * np.pi * 1.5 * t), np.where(t < 0.7, 1.0, -0.3))):
@@ -97,37 +97,53 @@ def test_json_object_has_the_issue_keys(
     """Print one JSON object: parameters {value, std, fixed}, train/validation MAEs, wall time."""
     stand, logs = bench
     out = tmp_path / "identified.toml"
+    envelope_file = tmp_path / "envelope.toml"
     argv = ["identify", str(logs[0]), "--stand", str(stand), "--validate", str(logs[1]), "--fit", FIT,
-            "--json", "-o", str(out), "--generations", "20"]  # fmt: skip
+            "--json", "-o", str(out), "--envelope-output", str(envelope_file), "--generations", "20"]  # fmt: skip
     assert main(argv) == 0
     captured = capsys.readouterr()
     data = json.loads(captured.out)
     assert set(data) >= {"parameters", "train", "validation", "wall_time_s"}
     assert set(data["parameters"]) == {
         "max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient",
-        "stiffness", "damping", "static_friction", "dynamic_friction", "viscous_friction", "armature",
-        "angle_offset",
+        "stiffness", "duty_effort", "damping", "static_friction", "dynamic_friction", "viscous_friction",
+        "armature", "angle_offset",
     }  # fmt: skip
     for name, entry in data["parameters"].items():
-        if name == "stiffness":  # [servo] duty_per_rad = 1: stiffness follows max_effort per log
+        if name == "stiffness":  # [servo] duty_per_rad = 1: stiffness follows duty_effort per log
             assert entry == {
                 "value": None,
                 "std": None,
+                "spread": None,
                 "fixed": True,
-                "derived": "duty_per_rad * max_effort, per log",
+                "derived": "duty_per_rad * duty_effort, per log",
             }
             continue
-        assert set(entry) == {"value", "std", "fixed"}
-        assert entry["fixed"] == (name not in [*FIT.split(","), "dynamic_friction"])
+        assert set(entry) == {"value", "std", "spread", "fixed"}
+        # duty_effort and dynamic_friction follow max_effort and static_friction
+        assert entry["fixed"] == (name not in [*FIT.split(","), "dynamic_friction", "duty_effort"])
+        if not entry["fixed"]:  # three restarts: the range of the values they ended at holds the result
+            low, high = entry["spread"]
+            assert low <= entry["value"] <= high
     assert data["parameters"]["armature"]["std"] is None
     assert data["parameters"]["max_effort"]["value"] == pytest.approx(0.45, rel=0.02)
     assert set(data["train"]["mae_position"]) == {"run0.csv"}
     assert set(data["validation"]["mae_position"]) == {"run1.csv"}
     assert data["train"]["mae_position_mean"] < 1e-3 and data["validation"]["mae_position_mean"] < 2e-3
     assert data["wall_time_s"] > 0 and "engine" not in data
-    envelope = load_envelope(out)
+    envelope = load_envelope(envelope_file)
     assert envelope.max_effort == data["parameters"]["max_effort"]["value"]
-    assert f"wrote {out}" in captured.err
+    assert f"wrote {out}" in captured.err and f"wrote {envelope_file}" in captured.err
+    written = read_stand(out)  # the identified stand: every value, to the last digit
+    assert written.scenario.drive.max_effort == data["parameters"]["max_effort"]["value"]
+    assert written.scenario.friction.static_friction == data["parameters"]["static_friction"]["value"]
+    assert written.scenario.drive.damping == data["parameters"]["damping"]["value"]
+    assert written.duty_per_rad == 1.0 and written.scenario.pendulum is not None
+    assert main(["replay", str(logs[1]), "--stand", str(out), "--json"]) == 0
+    replayed = json.loads(capsys.readouterr().out)
+    assert replayed["mae_position"]["run1.csv"] == pytest.approx(
+        data["validation"]["mae_position"]["run1.csv"], abs=1e-12
+    )
 
 
 def test_text_report_and_plot(
@@ -175,9 +191,11 @@ def test_mujoco_replay_reports_its_error(
     [
         (["--fit", "max_torque"], "--fit 'max_torque': unknown parameter"),
         (["--fit", "max_effort,,damping"], "expected comma-separated parameter names"),
-        (["-o", "{tmp}/env.txt"], "expected an envelope file name ending in .toml or .json"),
+        (["-o", "{tmp}/env.txt"], "expected a stand file name ending in .toml or .json"),
+        (["--envelope-output", "{tmp}/env.txt"], "expected an envelope file name ending in .toml or .json"),
         (["--plot", "{tmp}/fig.gif"], "expected a .png, .svg or .pdf file name"),
         (["--fit", "stiffness"], "ties stiffness to max_effort"),
+        (["--restarts", "0"], "--restarts: expected an integer in 1..100"),
     ],
 )
 def test_bad_requests_are_one_line(
@@ -303,7 +321,7 @@ def test_stiffness_tied_to_the_duty_gain_is_shown_as_derived(
         == 0
     )
     (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("stiffness")]
-    assert "duty_per_rad * max_effort, per log" in row and " 0 " not in row
+    assert "duty_per_rad * duty_effort, per log" in row and " 0 " not in row
 
 
 def test_outputs_are_checked_before_the_search(

@@ -32,6 +32,7 @@ TRUTH = {
     "velocity_dependent_resistance": 0.02,
     "speed_effort_gradient": 0.0,
     "stiffness": 0.0,
+    "duty_effort": 0.55,  # the servo loop's full-duty effort is the stall effort here
     "damping": 0.025,
     "static_friction": 0.03,
     "dynamic_friction": 0.03,

@@ -24,6 +24,7 @@ from drive_envelope._src.cli.commands import (
     identify,
     mujoco,
     plot,
+    replay,
     simulate,
     usd,
 )
@@ -33,7 +34,7 @@ from drive_envelope._src.version import VERSION
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
-COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit, identify)
+COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit, identify, replay)
 """The subcommand modules, in the order ``--help`` lists them; each has ``register(subparsers)``."""
 
 _ISSUES = "https://github.com/drive-envelope/drive-envelope/issues"

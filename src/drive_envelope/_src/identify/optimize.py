@@ -1,5 +1,10 @@
 """The search: SciPy's differential evolution over batched replays, then a least-squares polish.
 
+0. **Restarts**: ``restarts`` independent searches (steps 1 and 2), each from its own seed drawn
+   from ``seed`` (:class:`numpy.random.SeedSequence`); the lowest training cost wins. The values
+   the restarts end at give each parameter's seed spread: a direction the logs do not pin (two
+   lines that trade against each other) shows there as a wide range however small its
+   Gauss-Newton std.
 1. **Global**: :func:`scipy.optimize.differential_evolution` on the unit cube of the fitted
    parameters, ``vectorized=True``: every generation is one :meth:`Replay.errors` call that replays
    the whole population on every training log at once. The cost is the mean over logs of each
@@ -28,7 +33,7 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.parameters import ParameterSpace
 from drive_envelope._src.identify.replay import Replay
 
-__all__ = ["SearchOptions", "SearchResult", "search"]
+__all__ = ["SearchOptions", "SearchProgress", "SearchResult", "search"]
 
 FloatArray = npt.NDArray[np.float64]
 _JACOBIAN_STEP = 1e-3  # finite-difference step in the unit cube
@@ -48,16 +53,40 @@ class SearchOptions:
     """Weight of the mean absolute velocity error in the cost [s]: 0 fits position only."""
     seed: int = 0
     """Random seed of the search."""
+    restarts: int = 3
+    """Independent searches (global and polish), each seeded from ``seed``; the best is kept."""
 
     def __post_init__(self) -> None:
-        for name in ("generations", "population", "polish_evaluations", "seed"):
+        for name in ("generations", "population", "polish_evaluations", "seed", "restarts"):
             value = getattr(self, name)
-            low = 1 if name == "population" else 0
+            low = 1 if name in ("population", "restarts") else 0
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
         weight = self.velocity_weight
         if not (np.isfinite(weight) and weight >= 0.0):
             raise InputError(f"velocity_weight must be a finite number >= 0 [s], got {weight!r}")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class SearchProgress:
+    """Where a running search is, for a progress display."""
+
+    phase: str
+    """``"global"`` (differential evolution) or ``"polish"`` (least squares)."""
+    restart: int
+    """The current restart, from 1."""
+    restarts: int
+    """Restarts in all."""
+    generation: int
+    """Generations (global) or polish iterations done in this restart."""
+    generations: int
+    """Most generations (global) or polish iterations of this phase."""
+    best_cost: float
+    """Lowest training cost seen so far, all restarts [rad or m]."""
+    done: int
+    """Steps done in the whole search (generations and polish iterations)."""
+    total: int
+    """Most steps of the whole search."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -80,6 +109,10 @@ class SearchResult:
     """Whether the least-squares polish improved the point."""
     wall_time_s: float
     """Time spent [s]."""
+    restart_costs: tuple[float, ...] = ()
+    """The training cost each restart ended at [rad or m]."""
+    spread: dict[str, tuple[float, float]] | None = None
+    """Fitted parameter -> (lowest, highest) value the restarts ended at [SI]."""
 
 
 def search(
@@ -87,7 +120,7 @@ def search(
     space: ParameterSpace,
     options: SearchOptions,
     *,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[SearchProgress], None] | None = None,
 ) -> SearchResult:
     """Find the parameters that make the replay match the training logs best.
 
@@ -95,7 +128,7 @@ def search(
         replay: The packed training logs.
         space: The fitted parameters and their intervals.
         options: Search settings.
-        progress: Called as ``progress(generation, generations)`` after each generation.
+        progress: Called with a :class:`SearchProgress` after each generation and polish iteration.
 
     Raises:
         InputError: SciPy is missing (the ``identify`` extra).
@@ -105,47 +138,81 @@ def search(
     except ImportError:
         raise InputError("identify needs SciPy: pip install 'drive-envelope[identify]'") from None
     start = time.perf_counter()
-    counter = {"replays": 0, "generations": 0}
+    counter = {"replays": 0, "generations": 0, "done": 0}
+    state = _State()
+    per_restart = options.generations + options.polish_evaluations
+    total = options.restarts * per_restart
 
     def cost(unit: FloatArray) -> FloatArray:
         counter["replays"] += unit.shape[1]
         errors = replay.errors(space.to_values(unit))
-        total = errors.position.mean(axis=1)
+        costs = errors.position.mean(axis=1)
         if options.velocity_weight and errors.velocity is not None:
-            total = total + options.velocity_weight * errors.velocity.mean(axis=1)
-        return np.asarray(total)
+            costs = costs + options.velocity_weight * errors.velocity.mean(axis=1)
+        state.best = min(state.best, float(np.min(costs)))
+        return np.asarray(costs)
+
+    def tick(phase: str) -> None:
+        counter["done"] += 1
+        state.step = state.step + 1 if state.phase == phase else 1
+        state.phase = phase
+        if progress is not None:
+            progress(
+                SearchProgress(
+                    phase=phase,
+                    restart=state.restart,
+                    restarts=options.restarts,
+                    generation=state.step,
+                    generations=options.generations if phase == "global" else options.polish_evaluations,
+                    best_cost=state.best,
+                    done=counter["done"],
+                    total=total,
+                )
+            )
 
     def generation(*_: object) -> None:
         counter["generations"] += 1
-        if progress is not None:
-            progress(counter["generations"], options.generations)
+        tick("global")
 
-    best = space.to_unit(space.start)
-    if options.generations > 0:
-        found = differential_evolution(
-            cost,
-            [(0.0, 1.0)] * space.size,
-            vectorized=True,
-            updating="deferred",
-            popsize=options.population,
-            maxiter=options.generations,
-            tol=1e-4,
-            polish=False,
-            init="sobol",
-            x0=best,
-            rng=np.random.default_rng(options.seed),
-            callback=generation,
-        )
-        best = np.asarray(found.x, dtype=np.float64)
-    best_cost = float(cost(best[:, None])[0])
-    polished = False
-    if options.polish_evaluations > 0:
-        candidate = _polish(replay, space, best, options, counter)
-        candidate_cost = float(cost(candidate[:, None])[0])
-        if candidate_cost < best_cost:
-            best, best_cost, polished = candidate, candidate_cost, True
+    seeds = np.random.SeedSequence(options.seed).spawn(options.restarts)
+    ends: list[tuple[float, FloatArray, bool]] = []
+    for index, seed in enumerate(seeds):
+        state.restart, state.phase, state.step = index + 1, "", 0
+        counter["done"] = index * per_restart
+        best = space.to_unit(space.start)
+        if options.generations > 0:
+            found = differential_evolution(
+                cost,
+                [(0.0, 1.0)] * space.size,
+                vectorized=True,
+                updating="deferred",
+                popsize=options.population,
+                maxiter=options.generations,
+                tol=1e-4,
+                polish=False,
+                init="sobol",
+                x0=best,
+                rng=np.random.default_rng(seed),
+                callback=generation,
+            )
+            best = np.asarray(found.x, dtype=np.float64)
+        best_cost = float(cost(best[:, None])[0])
+        polished = False
+        counter["done"] = index * per_restart + options.generations
+        if options.polish_evaluations > 0:
+            candidate = _polish(replay, space, best, options, counter, lambda: tick("polish"))
+            candidate_cost = float(cost(candidate[:, None])[0])
+            if candidate_cost < best_cost:
+                best, best_cost, polished = candidate, candidate_cost, True
+        ends.append((best_cost, best, polished))
+    best_cost, best, polished = min(ends, key=lambda end: end[0])
     values = {name: float(array[0]) for name, array in space.to_values(best[:, None]).items()}
     std = _std(replay, space, best, counter)
+    ended = [space.to_values(end[1][:, None]) for end in ends]
+    spread = {
+        name: (min(float(v[name][0]) for v in ended), max(float(v[name][0]) for v in ended))
+        for name in space.names
+    }
     return SearchResult(
         unit=best,
         values=values,
@@ -155,7 +222,19 @@ def search(
         replays=counter["replays"],
         polished=polished,
         wall_time_s=time.perf_counter() - start,
+        restart_costs=tuple(end[0] for end in ends),
+        spread=spread,
     )
+
+
+@dataclass(slots=True)
+class _State:
+    """Where the search is (for progress reports)."""
+
+    best: float = np.inf
+    restart: int = 1
+    phase: str = ""
+    step: int = 0
 
 
 def _jacobian(
@@ -174,7 +253,12 @@ def _jacobian(
 
 
 def _polish(
-    replay: Replay, space: ParameterSpace, unit: FloatArray, options: SearchOptions, counter: dict[str, int]
+    replay: Replay,
+    space: ParameterSpace,
+    unit: FloatArray,
+    options: SearchOptions,
+    counter: dict[str, int],
+    tick: Callable[[], None],
 ) -> FloatArray:
     from scipy.optimize import least_squares
 
@@ -184,6 +268,7 @@ def _polish(
         key = np.asarray(x, dtype=np.float64).tobytes()
         if key not in cache:
             base, jacobian, _ = _jacobian(replay, space, np.asarray(x, dtype=np.float64), counter)
+            tick()
             cache.clear()
             cache[key] = (base, jacobian)
         return cache[key]

@@ -1,19 +1,23 @@
 """The parameters ``identify`` can estimate: names, units, starting values and search intervals.
 
-Eleven names, in SI, joint side: the envelope's four (``max_effort``, ``max_actuator_velocity``,
+Twelve names, in SI, joint side: the envelope's four (``max_effort``, ``max_actuator_velocity``,
 ``velocity_dependent_resistance``, ``speed_effort_gradient``), the drive's ``stiffness`` and
-``damping``, PhysX's joint friction (``static_friction``, ``dynamic_friction``,
-``viscous_friction``), ``armature`` and the pendulum's ``angle_offset``. Starting values come from the
-stand; a search interval from the stand's ``[bounds]`` or, by default, from the parameter's scale:
+``damping``, a servo's ``duty_effort`` (the effort its position loop commands at full duty:
+stiffness is ``duty_per_rad * duty_effort``), PhysX's joint friction (``static_friction``,
+``dynamic_friction``, ``viscous_friction``), ``armature`` and the pendulum's ``angle_offset``.
+Starting values come from the stand; a search interval from the stand's ``[bounds]`` or, by
+default, from the parameter's scale:
 
 * gains and limits with a positive start (``max_effort``, ``max_actuator_velocity``, ``stiffness``,
-  ``damping``): a factor 10 either side, searched on a log scale;
+  ``damping``, ``duty_effort``): a factor 10 either side, searched on a log scale;
 * slopes, friction and armature: ``[0, 10 x scale]`` with the effort scale ``max_effort``, the speed
   scale the largest measured speed and the inertia scale the stand's joint-space inertia;
 * ``angle_offset``: +-0.2 rad around its start.
 
 On a stand with Coulomb friction (``static_friction == dynamic_friction``), fitting only one of the
-two moves both. ``dynamic_friction`` is held at or below ``static_friction`` in the replay.
+two moves both; likewise ``duty_effort`` follows ``max_effort`` unless it is fitted or the stand's
+``[servo]`` gives it (a servo whose full duty is its stall effort). ``dynamic_friction`` is held at
+or below ``static_friction`` in the replay.
 
 :class:`ParameterSpace` maps the optimizer's unit cube to parameter values and back.
 """
@@ -40,6 +44,7 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "velocity_dependent_resistance": ("N*m*s/rad", "N*s/m"),
     "speed_effort_gradient": ("(rad/s)/(N*m)", "(m/s)/N"),
     "stiffness": ("N*m/rad", "N/m"),
+    "duty_effort": ("N*m", "N"),
     "damping": ("N*m*s/rad", "N*s/m"),
     "static_friction": ("N*m", "N"),
     "dynamic_friction": ("N*m", "N"),
@@ -55,7 +60,7 @@ DEFAULT_FIT = (
     "speed_effort_gradient",
 )
 """What ``--fit`` estimates when not given: the four envelope parameters."""
-_LOG_SCALE = ("max_effort", "max_actuator_velocity", "stiffness", "damping")
+_LOG_SCALE = ("max_effort", "max_actuator_velocity", "stiffness", "damping", "duty_effort")
 _ENVELOPE = DEFAULT_FIT
 
 
@@ -65,8 +70,13 @@ def parameter_units(joint: str = "revolute") -> dict[str, str]:
     return {name: units[index] for name, units in PARAMETERS.items()}
 
 
-def start_values(scenario: Scenario) -> dict[str, float]:
-    """Every parameter's value in the stand (SI): the starting or fixed values."""
+def start_values(scenario: Scenario, duty_effort: float | None = None) -> dict[str, float]:
+    """Every parameter's value in the stand (SI): the starting or fixed values.
+
+    Args:
+        scenario: The stand's scenario.
+        duty_effort: The stand's ``[servo] duty_effort`` [N*m or N]; None: ``drive.max_effort``.
+    """
     envelope = scenario.effective_envelope()
     drive, friction = scenario.drive, scenario.friction
     return {
@@ -75,6 +85,7 @@ def start_values(scenario: Scenario) -> dict[str, float]:
         "velocity_dependent_resistance": envelope.velocity_dependent_resistance if envelope else 0.0,
         "speed_effort_gradient": envelope.speed_effort_gradient if envelope else 0.0,
         "stiffness": drive.stiffness,
+        "duty_effort": drive.max_effort if duty_effort is None else duty_effort,
         "damping": drive.damping,
         "static_friction": friction.static_friction,
         "dynamic_friction": friction.dynamic_friction,
@@ -143,6 +154,7 @@ def build_space(
     bounds: Mapping[str, tuple[float, float]],
     speed_scale: float,
     source: str,
+    duty_effort: float | None = None,
 ) -> ParameterSpace:
     """The search space for ``names`` on this stand.
 
@@ -152,13 +164,15 @@ def build_space(
         bounds: The stand's ``[bounds]``.
         speed_scale: A typical joint speed [rad/s or m/s]: the largest measured speed.
         source: The stand file (for messages).
+        duty_effort: The stand's ``[servo] duty_effort`` [N*m or N], or None: it then follows
+            ``max_effort`` unless fitted.
 
     Raises:
         InputError: an unknown or repeated name, a parameter the stand cannot start from (an
             unlimited ``max_effort``, an infinite ``max_actuator_velocity``, ``angle_offset``
             without a pendulum), or a start outside its bounds.
     """
-    fixed = start_values(scenario)
+    fixed = start_values(scenario, duty_effort)
     for name in names:
         if name not in PARAMETERS:
             raise InputError(
@@ -187,6 +201,7 @@ def build_space(
         "viscous_friction": effort / speed_scale,
         "damping": effort / speed_scale,
         "stiffness": effort,
+        "duty_effort": effort,
         "armature": scenario.effective_inertia,
     }
     low, high, logs = [], [], []
@@ -207,8 +222,15 @@ def build_space(
         start=np.array([fixed[name] for name in names]),
         log_scale=tuple(logs),
         fixed=fixed,
-        tied=_coulomb_tie(names, fixed),
+        tied=_coulomb_tie(names, fixed) + _duty_tie(names, duty_effort),
     )
+
+
+def _duty_tie(names: Sequence[str], duty_effort: float | None) -> tuple[tuple[str, str], ...]:
+    """``duty_effort`` follows ``max_effort`` when only the latter is fitted and the stand sets none."""
+    if duty_effort is None and "max_effort" in names and "duty_effort" not in names:
+        return (("duty_effort", "max_effort"),)
+    return ()
 
 
 def _coulomb_tie(names: Sequence[str], fixed: Mapping[str, float]) -> tuple[tuple[str, str], ...]:

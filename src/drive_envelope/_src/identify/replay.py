@@ -8,7 +8,8 @@ when the log has no velocity) and follows its targets and ``torque_enable``; the
 ``i`` is compared with the measured row ``i``, as BAM compares its rollouts, so the mean absolute
 error of a log covers all its rows (row 0 is the initial state).
 
-A log's stiffness is ``duty_per_rad * max_effort`` when the log (sidecar) or the stand gives a duty
+A log's stiffness is ``duty_per_rad * duty_effort`` (``duty_effort`` is ``max_effort`` unless the
+stand or the fit separates them) when the log (sidecar) or the stand gives a duty
 gain (a voltage-driven servo), else the candidate's ``stiffness``. ``dynamic_friction`` above
 ``static_friction`` is clipped to it (PhysX's schema asks for ``dynamic <= static``).
 """
@@ -118,7 +119,7 @@ class Replay:
         size = int(np.asarray(values["max_effort"]).shape[0])
         duty = np.tile(self.duty, size)
         max_effort = each("max_effort")
-        stiffness = np.where(np.isfinite(duty), duty * max_effort, each("stiffness"))
+        stiffness = np.where(np.isfinite(duty), duty * each("duty_effort"), each("stiffness"))
         static = each("static_friction")
         pendulum = scenario.pendulum
         base = scenario.joint.inertia + (pendulum.inertia if pendulum is not None else 0.0)

@@ -3,9 +3,12 @@
 The JSON object (``drive-envelope identify --json``), SI throughout:
 
 ``parameters``
-    ``{name: {"value", "std", "fixed"}}`` for all eleven parameters: ``std`` is null for a fixed
-    parameter and ``"inf"`` for a fitted one the logs do not identify (an envelope line that
-    never binds); an infinite value is ``"inf"``, as in envelope files. A parameter that follows
+    ``{name: {"value", "std", "spread", "fixed"}}`` for every parameter (``duty_effort`` only with
+    a servo duty gain): ``std`` (Gauss-Newton) is null for a fixed parameter and ``"inf"`` for a
+    fitted one the logs do not identify (an envelope line that never binds); ``spread`` is
+    ``[lowest, highest]`` value the search's restarts ended at (null when fixed), the uncertainty
+    to trust when the logs trade two parameters against each other; an infinite value is
+    ``"inf"``, as in envelope files. A parameter that follows
     from others has a null value and ``"derived"`` saying how (stiffness with a servo duty gain:
     ``"duty_per_rad * max_effort, per log"``).
 ``train`` / ``validation``
@@ -68,6 +71,9 @@ def identification_to_dict(result: Identification) -> dict[str, Any]:
             name: {
                 "value": None if estimate.derived else _number(estimate.value),
                 "std": None if estimate.fixed else _number(estimate.std),
+                "spread": None
+                if estimate.fixed or estimate.spread is None
+                else [_number(estimate.spread[0]), _number(estimate.spread[1])],
                 "fixed": estimate.fixed,
                 **({"derived": estimate.derived} if estimate.derived else {}),
             }
@@ -81,6 +87,8 @@ def identification_to_dict(result: Identification) -> dict[str, Any]:
             "candidate_replays": result.search.replays,
             "polished": result.search.polished,
             "train_cost": result.search.cost,
+            "restarts": len(result.search.restart_costs),
+            "restart_costs": list(result.search.restart_costs),
         },
         "envelope": {
             key: _number(value) if isinstance(value, float) else value
@@ -112,16 +120,18 @@ def identification_text(result: Identification) -> str:
     rows = []
     for name, estimate in result.parameters.items():
         if estimate.derived:
-            rows.append([name, estimate.derived, "-", units[name].replace("**", "^")])
+            rows.append([name, estimate.derived, "-", "-", units[name].replace("**", "^")])
             continue
         if estimate.fixed:
-            std = "fixed"
-        elif estimate.std is None or math.isinf(estimate.std):
-            std = "not identified"
+            std, spread = "fixed", "-"
         else:
-            std = _fmt(estimate.std)
-        rows.append([name, _fmt(estimate.value), std, units[name].replace("**", "^")])
-    lines = [format_table(["parameter", "value", "std", "unit (SI)"], rows), ""]
+            identified = estimate.std is not None and not math.isinf(estimate.std)
+            std = _fmt(estimate.std) if identified else "not identified"
+            low, high = estimate.spread if estimate.spread is not None else (math.nan, math.nan)
+            spread = f"{low:.4g} .. {high:.4g}" if estimate.spread is not None else "-"
+        rows.append([name, _fmt(estimate.value), std, spread, units[name].replace("**", "^")])
+    header = ["parameter", "value", "std", f"restarts ({len(result.search.restart_costs)})", "unit (SI)"]
+    lines = [format_table(header, rows), ""]
     scale, unit = (1e3, "mrad") if result.scenario.joint.type == "revolute" else (1e3, "mm")
     table = []
     engine = result.engine != "reference"

@@ -22,8 +22,9 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.identify.canonical import canonical_envelope
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
-from drive_envelope._src.identify.optimize import SearchOptions, SearchResult, search
+from drive_envelope._src.identify.optimize import SearchOptions, SearchProgress, SearchResult, search
 from drive_envelope._src.identify.parameters import (
     DEFAULT_FIT,
     ParameterSpace,
@@ -43,8 +44,10 @@ __all__ = [
     "LogError",
     "identify",
     "log_scenario",
+    "engine_errors",
     "log_schedule",
     "mean_error",
+    "replay_errors",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -65,6 +68,8 @@ class Estimate:
     """True when the stand's value was kept (not in ``--fit``)."""
     derived: str = ""
     """How the value follows from others instead (stiffness with a servo duty gain), else ``""``."""
+    spread: tuple[float, float] | None = None
+    """Lowest and highest value the search's restarts ended at [SI]; None for a fixed parameter."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -95,6 +100,8 @@ class Identification:
     """The identified envelope."""
     scenario: Scenario
     """The stand with the identified values (``dt`` and duration of the first training log)."""
+    stand: IdentifyStand | None = None
+    """The identified stand: the scenario plus the servo gain and bounds (what ``-o`` writes)."""
     train: tuple[LogError, ...]
     """Replays of the training logs (reference engine)."""
     validation: tuple[LogError, ...]
@@ -121,7 +128,7 @@ def identify(
     fit: Sequence[str] = DEFAULT_FIT,
     options: SearchOptions | None = None,
     engine: str = "reference",
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[SearchProgress], None] | None = None,
 ) -> Identification:
     """Estimate the stand's parameters from bench logs.
 
@@ -132,7 +139,7 @@ def identify(
         fit: Parameters to estimate (:data:`~drive_envelope._src.identify.parameters.PARAMETERS`).
         options: Search settings (defaults: :class:`SearchOptions`).
         engine: ``"reference"``, ``"physx"`` or ``"mujoco"``: replay the result there too.
-        progress: Called as ``progress(generation, generations)`` during the search.
+        progress: Called with a :class:`SearchProgress` after each generation and polish step.
 
     Raises:
         InputError: a bad log, stand, name or engine, or an engine that cannot represent the stand.
@@ -152,34 +159,48 @@ def identify(
             "stiffness to max_effort; remove stiffness from --fit or the duty gain from the stand"
         )
     space = build_space(
-        setup.scenario, list(fit), bounds=setup.bounds, speed_scale=replay.speed_scale, source=setup.source
+        setup.scenario,
+        list(fit),
+        bounds=setup.bounds,
+        speed_scale=replay.speed_scale,
+        source=setup.source,
+        duty_effort=setup.duty_effort,
     )
     found = search(replay, space, options or SearchOptions(), progress=progress)
-    values = found.values
-    train_errors = _replay_errors(replay, values)
-    validation_errors = _replay_errors(Replay(setup, validation_logs), values) if validation_logs else ()
+    unit = "N*m" if setup.scenario.joint.type == "revolute" else "N"
+    # the errors below are those of the canonical values: what -o writes replays to the same numbers
+    values, canonical_notes = canonical_envelope(found.values, unit)
+    train_errors = replay_errors(replay, values)
+    validation_errors = replay_errors(Replay(setup, validation_logs), values) if validation_logs else ()
     scenario = _identified(setup, values, train_logs[0])
     engine_train, engine_validation = {}, {}
     if engine != "reference":
         engine_train = _engine_mae(engine, setup, values, train_logs)
         engine_validation = _engine_mae(engine, setup, values, validation_logs)
     leaders = dict(space.tied)  # a follower (Coulomb friction) is estimated with its leader
+    spread = found.spread or {}
     parameters = {
         name: Estimate(
             value=value,
             std=found.std.get(leaders.get(name, name)),
             fixed=leaders.get(name, name) not in space.names,
+            spread=spread.get(leaders.get(name, name)),
         )
         for name, value in values.items()
     }
-    if replay.uses_duty:  # stiffness is duty_per_rad * max_effort, per log: no single value
+    for name in _moved(found.values, values):
+        parameters[name] = dataclasses.replace(parameters[name], std=math.inf)  # the line does not bind
+    if replay.uses_duty:  # stiffness is duty_per_rad * duty_effort, per log: no single value
         parameters["stiffness"] = Estimate(
-            value=math.nan, std=None, fixed=True, derived="duty_per_rad * max_effort, per log"
+            value=math.nan, std=None, fixed=True, derived="duty_per_rad * duty_effort, per log"
         )
+    else:
+        del parameters["duty_effort"]  # no servo gain: the drive's own stiffness
     return Identification(
         parameters=parameters,
         envelope=scenario.effective_envelope() or PerformanceEnvelope(max_effort=values["max_effort"]),
         scenario=scenario,
+        stand=_identified_stand(setup, values, scenario, uses_duty=replay.uses_duty),
         train=train_errors,
         validation=validation_errors,
         search=found,
@@ -187,11 +208,43 @@ def identify(
         engine=engine,
         engine_train=engine_train,
         engine_validation=engine_validation,
-        notes=_log_notes(setup, [*train_logs, *validation_logs]) + _bound_notes(space, values),
+        notes=_log_notes(setup, [*train_logs, *validation_logs])
+        + _bound_notes(space, found.values)
+        + canonical_notes,
     )
 
 
-def _replay_errors(replay: Replay, values: dict[str, float]) -> tuple[LogError, ...]:
+def _moved(before: dict[str, float], after: dict[str, float]) -> list[str]:
+    """Envelope parameters canonical form moved (their line does not bind: not identified)."""
+    names = ("velocity_dependent_resistance", "speed_effort_gradient")
+    return [name for name in names if before[name] != after[name]]
+
+
+def _identified_stand(
+    setup: IdentifyStand, values: dict[str, float], scenario: Scenario, *, uses_duty: bool
+) -> IdentifyStand:
+    """The stand ``-o`` writes: identified values, the servo gain and bounds widened to hold them."""
+    bounds = {}
+    for name, (low, high) in setup.bounds.items():
+        value = values[name]
+        bounds[name] = (min(low, value), max(high, value))
+    duty_effort = values["duty_effort"] if uses_duty else None
+    if duty_effort is not None and duty_effort == values["max_effort"] and setup.duty_effort is None:
+        duty_effort = None  # the loop follows max_effort, as in the stand it came from
+    return IdentifyStand(
+        scenario=dataclasses.replace(
+            scenario,
+            joint=dataclasses.replace(scenario.joint, initial_position=0.0, initial_velocity=0.0),
+        ),
+        duty_per_rad=setup.duty_per_rad,
+        duty_effort=duty_effort,
+        bounds=bounds,
+        source=setup.source,
+    )
+
+
+def replay_errors(replay: Replay, values: dict[str, float]) -> tuple[LogError, ...]:
+    """Each log of ``replay`` replayed with ``values`` [SI] (reference engine)."""
     batch = {name: np.array([value]) for name, value in values.items()}
     errors = replay.errors(batch)
     result = replay.simulate(batch)
@@ -215,7 +268,7 @@ def log_scenario(setup: IdentifyStand, values: dict[str, float], log: BenchLog) 
     """The stand with ``values`` set up to replay ``log`` (its dt, length and initial state)."""
     base = setup.scenario
     duty = log.duty_per_rad if log.duty_per_rad is not None else setup.duty_per_rad
-    stiffness = duty * values["max_effort"] if duty is not None else values["stiffness"]
+    stiffness = duty * values["duty_effort"] if duty is not None else values["stiffness"]
     drive = dataclasses.replace(
         base.drive, stiffness=stiffness, damping=values["damping"], max_effort=values["max_effort"]
     )
@@ -273,6 +326,17 @@ def _engine_mae(
     engine: str, setup: IdentifyStand, values: dict[str, float], logs: Sequence[BenchLog]
 ) -> dict[str, float]:
     """Position MAE of each log replayed in ``engine`` (physx or mujoco)."""
+    return {name: errors[0] for name, errors in engine_errors(engine, setup, values, logs).items()}
+
+
+def engine_errors(
+    engine: str, setup: IdentifyStand, values: dict[str, float], logs: Sequence[BenchLog]
+) -> dict[str, tuple[float, float | None]]:
+    """Position and velocity MAE of each log replayed in ``engine`` (physx or mujoco).
+
+    Returns:
+        Log file name -> (position MAE [rad or m], velocity MAE [rad/s or m/s], None without velocity).
+    """
     if not logs:
         return {}
     from drive_envelope._src.teststand.engines import engine_module
@@ -290,7 +354,10 @@ def _engine_mae(
         _load_mujoco_plugin()
         trajectories = [run(s, schedule=p) for s, p in zip(scenarios, schedules, strict=True)]
     return {
-        log.name: float(np.mean(np.abs(trajectory.position - log.position)))
+        log.name: (
+            float(np.mean(np.abs(trajectory.position - log.position))),
+            None if log.velocity is None else float(np.mean(np.abs(trajectory.velocity - log.velocity))),
+        )
         for log, trajectory in zip(logs, trajectories, strict=True)
     }
 
@@ -316,7 +383,7 @@ def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
         if isinstance(named, str) and named != stem:
             notes.append(
                 f"{log.path}: its sidecar names the log {named!r}: a sidecar copied from another log? "
-                "(its kp_duty_per_rad and bench numbers are used as they are)"
+                "(its kp_duty_per_rad is used as it is; the pendulum is the stand's)"
             )
         for key, stand_key in (("mass_kg", "mass"), ("length_m", "distance")):
             value = sidecar.get(key)
@@ -332,7 +399,8 @@ def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
             if abs(float(value) - expected) > _SIDECAR_TOLERANCE * max(abs(expected), 1e-12):
                 notes.append(
                     f"{log.path}: its sidecar gives {key} = {value:g} but {setup.source} has "
-                    f"pendulum.{stand_key} = {expected:g}"
+                    f"pendulum.{stand_key} = {expected:g}: the replay uses the stand's "
+                    f"{expected:g} (fix whichever is wrong)"
                 )
         if with_duty and log.duty_per_rad is None and setup.duty_per_rad is not None:
             notes.append(

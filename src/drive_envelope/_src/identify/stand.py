@@ -9,6 +9,10 @@ for a gravity load) with two optional tables of its own:
     so its position loop is a drive of stiffness ``duty_per_rad * max_effort``: the stiffness follows
     the identified ``max_effort``. A log's JSON sidecar ``kp_duty_per_rad`` replaces it for that log
     (bench sets often sweep the gain). Without it the drive's ``stiffness`` is the stand's.
+    ``duty_effort`` [N*m or N]: the effort the loop commands at full duty, so stiffness is
+    ``duty_per_rad * duty_effort``; by default ``max_effort`` (and it follows a fitted
+    ``max_effort``). An identified stand writes it when the envelope's canonical ``max_effort``
+    differs from it (the speed line caps the effort at rest below it).
 ``[bounds]``
     ``name = [low, high]`` in SI for any parameter ``--fit`` may name: the search interval.
 
@@ -50,6 +54,9 @@ class IdentifyStand:
     """The scenario: the stand's joint, loads, drive, envelope and solver settings (SI)."""
     duty_per_rad: float | None = None
     """``[servo] duty_per_rad`` [1/rad], or None: stiffness is then the drive's own."""
+    duty_effort: float | None = None
+    """``[servo] duty_effort`` [N*m or N], or None: ``max_effort`` (stiffness is ``duty_per_rad *
+    duty_effort``)."""
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
     """``[bounds]``: search interval per parameter name (SI)."""
     source: str = "stand"
@@ -95,6 +102,7 @@ def read_stand(
     return IdentifyStand(
         scenario=scenario,
         duty_per_rad=_duty(own["servo"], source),
+        duty_effort=_duty_effort(own["servo"], scenario.joint.type, source),
         bounds=_bounds(own["bounds"], parameter_units, scenario.joint.type, source),
         source=source,
     )
@@ -106,18 +114,33 @@ def _table(value: object, name: str, source: str) -> dict[str, Any]:
     return dict(value)
 
 
+_SERVO_KEYS = ("duty_per_rad", "duty_effort")
+
+
 def _duty(table: Mapping[str, Any], source: str) -> float | None:
     for key in table:
-        if key != "duty_per_rad":
+        if key not in _SERVO_KEYS:
             raise InputError(
-                f"{source}: unknown key 'servo.{key}'{nearest_key(str(key), ('duty_per_rad',))}; "
-                "valid keys in [servo]: duty_per_rad"
+                f"{source}: unknown key 'servo.{key}'{nearest_key(str(key), _SERVO_KEYS)}; "
+                f"valid keys in [servo]: {', '.join(_SERVO_KEYS)}"
             )
     if "duty_per_rad" not in table:
         return None
     value = read_quantity(table["duty_per_rad"], "1/rad", f"{source}: key 'servo.duty_per_rad'")
     if not (math.isfinite(value) and value > 0.0):
         raise InputError(f"{source}: key 'servo.duty_per_rad': expected a number > 0 [1/rad], got {value!r}")
+    return value
+
+
+def _duty_effort(table: Mapping[str, Any], joint: str, source: str) -> float | None:
+    if "duty_effort" not in table:
+        return None
+    unit = "N*m" if joint == "revolute" else "N"
+    value = read_quantity(table["duty_effort"], unit, f"{source}: key 'servo.duty_effort'")
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"{source}: key 'servo.duty_effort': expected a number > 0 [{unit}], got {value!r}")
+    if "duty_per_rad" not in table:
+        raise InputError(f"{source}: key 'servo.duty_effort' needs servo.duty_per_rad (the gain it scales)")
     return value
 
 

@@ -14,8 +14,9 @@ from drive_envelope._src.cli.common import (
 
 _PARAMETERS = (
     "max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient, stiffness, "
-    "damping, static_friction, dynamic_friction, viscous_friction, armature, angle_offset"
+    "duty_effort, damping, static_friction, dynamic_friction, viscous_friction, armature, angle_offset"
 )
+_REPORT_EVERY = 10.0  # s between progress lines when stderr is not a terminal (a log file, CI)
 
 
 def _nonnegative(text: str) -> float:
@@ -38,8 +39,10 @@ def register(subparsers: Any) -> None:
             "target_velocity, torque_enable) through the reference test stand of the stand file and "
             "search the parameters that make the simulated positions match the measured ones "
             "(differential evolution over batched replays, then a least-squares polish). Prints the "
-            "parameters with their standard deviations and the mean absolute position error per log; "
-            "writes the identified envelope (-o) and a figure (--plot). Needs SciPy (the identify extra)."
+            "parameters with their standard deviations and restart spread and the mean absolute position "
+            "error per log; writes the identified stand (-o: every identified and fixed parameter, read "
+            "by identify --stand and replay --stand), the envelope file (--envelope-output) and a figure "
+            "(--plot). Needs SciPy (the identify extra)."
         ),
     )
     parser.add_argument(
@@ -67,7 +70,17 @@ def register(subparsers: Any) -> None:
         help="also replay the result in physx (real PhysX, ovphysx) or mujoco and report its error",
     )
     add_format_argument(parser, ("text", "json"), "the report as text or as one JSON object (SI)")
-    add_output_argument(parser, "write the identified envelope file (.toml or .json), atomically")
+    add_output_argument(
+        parser,
+        "write the identified stand (.toml or .json), atomically: replay --stand reads it",
+        metavar="STAND",
+    )
+    parser.add_argument(
+        "--envelope-output",
+        metavar="FILE",
+        default=None,
+        help="write the identified envelope file (.toml or .json) for usd apply / mujoco apply",
+    )
     parser.add_argument("--plot", metavar="FIG", default=None, help="write the figure (.png, .svg or .pdf)")
     parser.add_argument(
         "--generations",
@@ -92,6 +105,14 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--seed", type=integer_at_least(0), default=0, metavar="N", help="random seed (default 0)"
+    )
+    parser.add_argument(
+        "--restarts",
+        type=integer_at_least(1, 100),
+        default=3,
+        metavar="N",
+        help="independent searches from seeds drawn from --seed; the best wins, their spread is reported "
+        "(default 3)",
     )
     add_force_argument(parser)
     parser.set_defaults(func=_run)
@@ -121,14 +142,17 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.io.atomic import check_writable
 
     output = checked_output(args.output)
+    envelope_output = checked_output(args.envelope_output, "--envelope-output")
     plot = checked_output(args.plot, "--plot")
     if output is not None:
-        _check_envelope_path(output)
+        _check_path(output, "--output", "a stand file")
+    if envelope_output is not None:
+        _check_path(envelope_output, "--envelope-output", "an envelope file")
     if plot is not None:
         from drive_envelope._src.plots.figure import check_figure_path
 
         check_figure_path(plot, "--plot")
-    for path in (output, plot):  # before the search, which takes a while: never lose its result
+    for path in (output, envelope_output, plot):  # before the search, which takes a while
         if path is not None:
             check_writable(path, force=args.force)
     options = SearchOptions(
@@ -136,8 +160,9 @@ def _run(args: argparse.Namespace) -> int:
         population=args.population,
         velocity_weight=args.velocity_weight,
         seed=args.seed,
+        restarts=args.restarts,
     )
-    progress = Progress("identify")
+    progress = _Progress(Progress("identify"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", StandWarning)
         try:
@@ -158,9 +183,14 @@ def _run(args: argparse.Namespace) -> int:
     for note in result.notes:
         warn(note)
     if output is not None:
+        from drive_envelope._src.identify.stand_file import save_stand
+
+        assert result.stand is not None
+        save_stand(result.stand, output, comments=_stand_comments(args, result), force=args.force)
+    if envelope_output is not None:
         from drive_envelope._src.io.envelope_file import save_envelope
 
-        save_envelope(result.envelope, output, force=args.force)
+        save_envelope(result.envelope, envelope_output, force=args.force)
     if plot is not None:
         from drive_envelope._src.identify.plot import save_identification_figure
 
@@ -169,16 +199,67 @@ def _run(args: argparse.Namespace) -> int:
         print(json.dumps(identification_to_dict(result), indent=2))
     else:
         print(identification_text(result))
-    for path in (output, plot):
+    for path in (output, envelope_output, plot):
         if path is not None:
             status(f"wrote {path}")
     return 0
 
 
-def _check_envelope_path(path: str) -> None:
+def _check_path(path: str, flag: str, what: str) -> None:
     from pathlib import Path
 
     from drive_envelope._src.errors import InputError
 
     if Path(path).suffix.lower() not in (".toml", ".json"):
-        raise InputError(f"--output {path!r}: expected an envelope file name ending in .toml or .json")
+        raise InputError(f"{flag} {path!r}: expected {what} name ending in .toml or .json")
+
+
+def _stand_comments(args: argparse.Namespace, result: Any) -> list[str]:
+    """Where the stand came from, for the file's header."""
+    from drive_envelope._src.identify.parameters import DEFAULT_FIT
+    from drive_envelope._src.identify.run import mean_error
+
+    lines = [
+        f"identified by drive-envelope identify from {len(result.train)} log(s) on {args.stand}",
+        f"--fit {args.fit or ','.join(DEFAULT_FIT)}",
+        f"seed {args.seed}, {args.restarts} restart(s), train cost {result.search.cost:.9g}",
+        f"mean position error [rad or m]: train {mean_error(result.train):.9g}"
+        + (f", validation {mean_error(result.validation):.9g}" if result.validation else ""),
+        "replay LOG... --stand THIS_FILE replays logs with it; identify --stand THIS_FILE starts from it",
+    ]
+    lines.extend(f"note: {note}" for note in result.notes)
+    return lines
+
+
+class _Progress:
+    """The search's progress: a bar on a terminal (global and polish steps), else a line every 10 s."""
+
+    def __init__(self, bar: Any) -> None:
+        import sys
+        import time
+
+        self.bar = bar
+        self.terminal = bar.enabled
+        self.clock = time.monotonic
+        self.start = self.clock()
+        self.last = self.start
+        self.stream = sys.stderr
+
+    def __call__(self, state: Any) -> None:
+        phase = "search" if state.phase == "global" else "polish"
+        where = f"restart {state.restart}/{state.restarts}, {phase} {state.generation}/{state.generations}"
+        if self.terminal:
+            self.bar.label = f"identify ({where})"
+            self.bar(state.done, state.total)
+            return
+        now = self.clock()
+        if now - self.last >= _REPORT_EVERY:
+            self.last = now
+            print(
+                f"identify: {where}, best cost {state.best_cost:.6g}, {now - self.start:.0f} s",
+                file=self.stream,
+                flush=True,
+            )
+
+    def close(self) -> None:
+        self.bar.close()
