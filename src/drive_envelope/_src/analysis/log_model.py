@@ -7,7 +7,9 @@ compared ignoring case and surrounding spaces, so ``Time, Velocity [RPM], Effort
 one column given two roles (``--velocity-column effort``) is an error, never a silent first pick.
 A header may carry a unit after the name (``velocity [rpm]``, ``effort (mNm)``, see
 :mod:`.log_units`): the column is found by its name (``velocity``) or its whole text, and its values
-are converted to SI. Numbers in chunks are SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
+are converted to SI. A ROS 2 bag (:mod:`.log_bag`) becomes a long table of these columns (one
+``joint`` per name in its JointState messages) and follows the same rules. Numbers in chunks are
+SI: velocity [rad/s or m/s], effort [N*m or N], time [s].
 Time may go back (a log of several episodes, each from 0): the check counts each jump back as the
 start of an episode and says so (:mod:`.check`).
 """
@@ -22,6 +24,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_bag import BagOptions
 from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
@@ -75,6 +78,9 @@ class LogColumns:
     """Joint type the log is read for, which fixes the SI unit a header's unit converts to (rad/s
     and N*m, or m/s and N); a unit of the other type is an error. None: either, as the units say
     (both columns' units must then agree)."""
+    bag: BagOptions | None = None
+    """Topics and time source of a ROS 2 bag (:mod:`.log_bag`); None: the bag's only JointState
+    topic, no command topic, header stamps."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)

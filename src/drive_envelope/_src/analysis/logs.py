@@ -1,7 +1,8 @@
 """Reading logs of (velocity, effort) samples in bounded-memory chunks.
 
 Sources: CSV files (``.csv``, ``.tsv``, ``.txt``, each optionally ``.gz``), Parquet files
-(``.parquet``, ``.pq``), or an in-memory table: a mapping of column name to array, a pandas
+(``.parquet``, ``.pq``), ROS 2 bags (a rosbag2 folder or its ``.mcap`` / ``.db3``, :mod:`.log_bag`;
+``LogColumns.bag`` picks the topics), or an in-memory table: a mapping of column name to array, a pandas
 DataFrame or a pyarrow Table. CSV goes through pyarrow's streaming reader when pyarrow is installed
 and through the standard library's ``csv`` module otherwise; Parquet needs pyarrow. Leading lines
 starting with ``#`` (metadata comments) and blank lines are skipped; spaces around column names are
@@ -27,6 +28,7 @@ from typing import Any, Literal
 import numpy as np
 
 from drive_envelope._src.analysis.log_arrow import iter_parquet, iter_table
+from drive_envelope._src.analysis.log_bag import bag_table, is_bag, read_bag
 from drive_envelope._src.analysis.log_csv import iter_csv_arrow, iter_csv_python
 from drive_envelope._src.analysis.log_model import LogChunk, LogColumns
 from drive_envelope._src.errors import InputError
@@ -86,7 +88,9 @@ def iter_log(
     if engine not in ("auto", "pyarrow", "python"):
         raise InputError(f"engine: expected 'auto', 'pyarrow' or 'python', got {engine!r}")
     label = source_label(source)
-    if isinstance(source, (str, os.PathLike)):
+    if isinstance(source, (str, os.PathLike)) and is_bag(source):  # a ROS 2 bag: one long table
+        chunks = iter_table(bag_table(read_bag(source, columns.bag)), columns, chunk_rows, label)
+    elif isinstance(source, (str, os.PathLike)):
         path = Path(source)
         if path.is_dir():
             raise InputError(f"{label}: is a folder; expected a log file")

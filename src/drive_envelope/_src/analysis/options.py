@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["add_column_arguments", "columns_from_args"]
+__all__ = ["add_bag_arguments", "add_column_arguments", "bag_from_args", "columns_from_args"]
 
 
 def add_column_arguments(parser: argparse.ArgumentParser, *, time: bool = True) -> None:
@@ -27,6 +27,47 @@ def add_column_arguments(parser: argparse.ArgumentParser, *, time: bool = True) 
         metavar="C",
         help="joint name of a long-format log with several joints (default: 'joint' when the log has it)",
     )
+    add_bag_arguments(parser)
+
+
+def add_bag_arguments(parser: argparse.ArgumentParser, *, commands: bool = True) -> None:
+    """Add ``--topic``, ``--bag-time`` (and ``--command-topic``, ``--command-joints``) for ROS 2 bags."""
+    group = parser.add_argument_group("ROS 2 bags (a rosbag2 folder or its .mcap/.db3; the ros extra)")
+    group.add_argument(
+        "--topic", default=None, metavar="TOPIC", help="sensor_msgs/JointState topic (default: the only one)"
+    )
+    if commands:
+        group.add_argument(
+            "--command-topic",
+            default=None,
+            metavar="TOPIC",
+            help="targets: JointState, JointTrajectory (first point) or Float64MultiArray; NaN = drive off",
+        )
+        group.add_argument(
+            "--command-joints",
+            default=None,
+            metavar="A,B,...",
+            help="joint order of a Float64MultiArray command (default: the JointState order)",
+        )
+    group.add_argument(
+        "--bag-time",
+        choices=("header", "bag"),
+        default="header",
+        help="sample time from the message header stamps (default) or the bag's receive times",
+    )
+
+
+def bag_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~drive_envelope._src.analysis.log_bag.BagOptions` the flags name."""
+    from drive_envelope._src.analysis.log_bag import BagOptions
+
+    joints = getattr(args, "command_joints", None)
+    return BagOptions(
+        topic=args.topic,
+        command_topic=getattr(args, "command_topic", None),
+        joint_order=tuple(name.strip() for name in joints.split(",") if name.strip()) if joints else (),
+        time=args.bag_time,
+    )
 
 
 def columns_from_args(args: argparse.Namespace) -> Any:
@@ -41,4 +82,5 @@ def columns_from_args(args: argparse.Namespace) -> Any:
         joint=args.joint_column or "joint",
         require_time=time is not None,
         require_joint=args.joint_column is not None,
+        bag=bag_from_args(args),
     )

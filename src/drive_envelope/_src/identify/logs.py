@@ -1,7 +1,9 @@
 """Bench logs for identification: a joint's measured motion and the commands that caused it.
 
 A log is a CSV (``.csv``, ``.tsv``, ``.txt``, optionally ``.gz``; ``#`` comment lines before the
-header are skipped) or Parquet file (needs pyarrow) with the columns
+header are skipped), a Parquet file (needs pyarrow) or one joint of a ROS 2 bag
+(:mod:`drive_envelope._src.analysis.log_bag`: JointState states, targets from a command topic, a NaN
+target for ``torque_enable = 0``) with the columns
 
 ========================  ===========  =========================================================
 ``time``                  required     sample time [s], on a uniform grid (the replay's step)
@@ -38,6 +40,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.errors import InputError
 
 __all__ = ["COLUMNS", "BenchLog", "read_bench_log"]
@@ -94,22 +97,32 @@ class BenchLog:
         return float(np.median(np.diff(self.time)))
 
 
-def read_bench_log(path: str | os.PathLike[str]) -> BenchLog:
-    """Read a bench log (CSV or Parquet) and its optional JSON sidecar.
+def read_bench_log(
+    path: str | os.PathLike[str], *, bag: BagOptions | None = None, joint: str | None = None
+) -> BenchLog:
+    """Read a bench log (CSV, Parquet or a ROS 2 bag) and its optional JSON sidecar.
+
+    Args:
+        path: The log file, or a rosbag2 folder (or its ``.mcap`` / ``.db3`` file).
+        bag: A bag's topics (:class:`~drive_envelope._src.analysis.log_bag.BagOptions`): the
+            JointState topic and the command topic the targets come from (needed for a bag).
+        joint: The joint of a bag to read; None: the bag's only joint.
 
     Raises:
         InputError: a missing file or column, a cell that is not a finite number (naming the row
             and column), fewer than 3 rows, a time column off a uniform grid, a ``torque_enable``
             other than 0/1, or a sidecar that is not a JSON object with a positive
-            ``kp_duty_per_rad``.
+            ``kp_duty_per_rad``; for a bag, no command topic or a joint it does not have.
     """
     file = Path(path)
     label = str(file)
-    if file.is_dir():
+    if is_bag(file):
+        columns = _read_bag(file, label, bag or BagOptions(), joint)
+    elif file.is_dir():
         raise InputError(f"{label}: is a folder; expected a bench log file")
-    if not file.is_file():
+    elif not file.is_file():
         raise InputError(f"{label}: no such file")
-    if file.suffix.lower() in _PARQUET:
+    elif file.suffix.lower() in _PARQUET:
         columns = _read_parquet(file, label)
     else:
         columns = _read_csv(file, label)
@@ -190,6 +203,33 @@ def _plan(header: list[str], label: str) -> tuple[dict[str, int], dict[str, floa
             f"{', '.join(_REQUIRED)} (optional: {', '.join(COLUMNS[3:])}); found {', '.join(header)}"
         )
     return plan, scales
+
+
+def _read_bag(file: Path, label: str, options: BagOptions, joint: str | None) -> dict[str, FloatArray]:
+    """A bag joint's columns: states from ``options.topic``, targets from ``options.command_topic``."""
+    if options.command_topic is None:
+        raise InputError(
+            f"{label}: a ROS 2 bag needs --command-topic (the targets: JointState, JointTrajectory or "
+            "Float64MultiArray) to be replayed"
+        )
+    joints = read_bag(file, options)
+    names = [item.name for item in joints]
+    if joint is None:
+        if len(joints) != 1:
+            raise InputError(f"{label}: the bag has joints {', '.join(names)}; name one with --joint")
+        chosen = joints[0]
+    elif joint in names:
+        chosen = joints[names.index(joint)]
+    else:
+        raise InputError(f"{label}: --joint {joint!r}: not in the bag's joints ({', '.join(names)})")
+    columns = {"time": chosen.time, **chosen.columns}
+    for column in ("position", "target_position"):
+        if column not in columns:
+            what = "the state topic's position" if column == "position" else "a command for this joint"
+            raise InputError(f"{label}: joint {chosen.name!r} has no {column}: expected {what}")
+    for column, values in columns.items():
+        _check_finite(values, column, label)
+    return columns
 
 
 def _open_text(file: Path) -> Any:

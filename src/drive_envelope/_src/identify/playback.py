@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from drive_envelope._src.analysis.log_bag import BagOptions
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
 from drive_envelope._src.identify.parameters import parameter_units, start_values
@@ -56,8 +57,10 @@ def replay_logs(
     stand: str | os.PathLike[str],
     *,
     engine: str = "reference",
+    bag: BagOptions | None = None,
+    joint: str | None = None,
 ) -> Playback:
-    """Replay ``logs`` through ``stand`` in ``engine``.
+    """Replay ``logs`` through ``stand`` in ``engine`` (``bag`` and ``joint`` for ROS 2 bags).
 
     Raises:
         InputError: a bad log, stand or engine, or no log.
@@ -68,7 +71,7 @@ def replay_logs(
     if not logs:
         raise InputError("replay: give at least one log")
     setup = read_stand(stand, parameter_units())
-    read = [read_bench_log(path) for path in logs]
+    read = [read_bench_log(path, bag=bag, joint=joint) for path in logs]
     names = [log.name for log in read]
     if len(set(names)) != len(names):
         twice = sorted({name for name in names if names.count(name) > 1})

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_bag import BagOptions
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.canonical import canonical_envelope
@@ -129,6 +130,8 @@ def identify(
     options: SearchOptions | None = None,
     engine: str = "reference",
     progress: Callable[[SearchProgress], None] | None = None,
+    bag: BagOptions | None = None,
+    joint: str | None = None,
 ) -> Identification:
     """Estimate the stand's parameters from bench logs.
 
@@ -140,6 +143,8 @@ def identify(
         options: Search settings (defaults: :class:`SearchOptions`).
         engine: ``"reference"``, ``"physx"`` or ``"mujoco"``: replay the result there too.
         progress: Called with a :class:`SearchProgress` after each generation and polish step.
+        bag: Topics of ROS 2 bag logs (:class:`~drive_envelope._src.analysis.log_bag.BagOptions`).
+        joint: The joint of a bag log to identify (None: the bag's only joint).
 
     Raises:
         InputError: a bad log, stand, name or engine, or an engine that cannot represent the stand.
@@ -150,8 +155,8 @@ def identify(
     if not train:
         raise InputError("identify: give at least one training log")
     setup = read_stand(stand, parameter_units())
-    train_logs = [read_bench_log(path) for path in train]
-    validation_logs = [read_bench_log(path) for path in validate]
+    train_logs = [read_bench_log(path, bag=bag, joint=joint) for path in train]
+    validation_logs = [read_bench_log(path, bag=bag, joint=joint) for path in validate]
     replay = Replay(setup, train_logs)
     if "stiffness" in fit and replay.uses_duty:
         raise InputError(

@@ -114,8 +114,18 @@ def register(subparsers: Any) -> None:
         help="independent searches from seeds drawn from --seed; the best wins, their spread is reported "
         "(default 3)",
     )
+    _add_bag_arguments(parser)
     add_force_argument(parser)
     parser.set_defaults(func=_run)
+
+
+def _add_bag_arguments(parser: argparse.ArgumentParser) -> None:
+    from drive_envelope._src.analysis.options import add_bag_arguments
+
+    add_bag_arguments(parser)
+    parser.add_argument(
+        "--joint", default=None, metavar="NAME", help="the joint of a bag (default: its only one)"
+    )
 
 
 def _fit_names(text: str | None) -> list[str]:
@@ -134,6 +144,7 @@ def _run(args: argparse.Namespace) -> int:
     import json
     import warnings
 
+    from drive_envelope._src.analysis.options import bag_from_args
     from drive_envelope._src.cli.common import Progress, checked_output, status, warn
     from drive_envelope._src.identify.optimize import SearchOptions
     from drive_envelope._src.identify.report import identification_text, identification_to_dict
@@ -174,6 +185,8 @@ def _run(args: argparse.Namespace) -> int:
                 options=options,
                 engine=args.engine,
                 progress=progress,
+                bag=bag_from_args(args),
+                joint=args.joint,
             )
         finally:
             progress.close()
