@@ -91,7 +91,9 @@ double ReadControl(const mjModel* m, const mjData* d, int i) {
 }  // namespace
 
 CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
-    : drives_(std::move(structure.drives)), native_(std::move(structure.native)) {
+    : drives_(std::move(structure.drives)),
+      native_(std::move(structure.native)),
+      solver_numeric_(structure.solver_numeric) {
   // rows: every drive, and every damped dof without one (its implicit damping couples the drives)
   std::vector<int> row_of(m->nv, -1);
   for (size_t k = 0; k < drives_.size(); k++) row_of[drives_[k].dof] = static_cast<int>(k);
@@ -169,7 +171,12 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   rest_.assign(n, 0);
   slope_.assign(n, 0);
   result_.assign(n, RowResult());
-  warned_.assign(drives_.size() + 1, 0);
+  desc_.assign(n, ImplicitDriveDesc());
+  moved_.assign(n, 0);
+  shift_.assign(n, 0);
+  bias_.assign(n, 0);
+  bias_force_.assign(m->nv, 0);
+  warned_.assign(drives_.size() + 2, 0);
 }
 
 void CoupledSolver::Warn(int key, const char* format, const char* name, const char* detail) {
@@ -256,28 +263,37 @@ void CoupledSolver::SmoothVelocity(const mjModel* m, mjData* d, double dt) {
     }
   }
 
+  HalfSolve(m, d, force);
+  for (int r = 0; r < nrow_; r++) qvel_[r] = d->qvel[rows_[r].dof];
+}
+
+void CoupledSolver::HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const {
   // only the rows of M^-1*force are needed: e_dof'*M^-1*force = z'*D^-1*(L^-T*force), so one
-  // triangular solve here and a dot product per row once z is known (FreeVelocity)
-  for (int k = nv - 1; k > 0; k--) {
+  // triangular solve here and a dot product per row once z is known (RowsOf)
+  for (int k = m->nv - 1; k > 0; k--) {
     double fk = force[k];
     if (fk == 0) continue;
     for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
       force[m->M_colind[adr]] -= d->qLD[adr] * fk;
     }
   }
-  for (int r = 0; r < nrow_; r++) qvel_[r] = d->qvel[rows_[r].dof];
+}
+
+void CoupledSolver::RowsOf(const mjData* d, const mjtNum* half, double* out) const {
+  // (M^-1*force) at each row's dof, from HalfSolve's result and the rows' z (Response)
+  const mjtNum* dinv = d->qLDiagInv;
+  for (int r = 0; r < nrow_; r++) out[r] = 0;
+  for (int k : dofs_) {
+    double gk = half[k] * dinv[k];
+    const double* z = zd_.data() + member_adr_[k];
+    const int* rows = member_row_.data() + member_adr_[k];
+    for (int i = 0; i < member_num_[k]; i++) out[rows[i]] += z[i] * gk;
+  }
 }
 
 void CoupledSolver::FreeVelocity(double dt, const mjData* d) {
   // end-of-step velocity of each row without any drive: qvel + h*(M^-1*force)_dof
-  const mjtNum* dinv = d->qLDiagInv;
-  for (int r = 0; r < nrow_; r++) vfree_[r] = 0;
-  for (int k : dofs_) {
-    double gk = force_[k] * dinv[k];
-    const double* z = zd_.data() + member_adr_[k];
-    const int* rows = member_row_.data() + member_adr_[k];
-    for (int i = 0; i < member_num_[k]; i++) vfree_[rows[i]] += z[i] * gk;
-  }
+  RowsOf(d, force_.data(), vfree_.data());
   for (int r = 0; r < nrow_; r++) vfree_[r] = qvel_[r] + dt * vfree_[r];
 }
 
@@ -343,6 +359,7 @@ void CoupledSolver::Response(const mjModel* m, const mjData* d) {
 
 int CoupledSolver::Compute(const mjModel* m, mjData* d) {
   solves_ = 0;
+  shift_pending_ = false;
   double dt = m->opt.timestep;
   bool valid = dt > 0 && std::isfinite(dt);
   if (!valid) {
@@ -352,6 +369,16 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
          "give no effort", "'timestep'", value.c_str());
   } else {
     ReadRequests(m, d, dt);
+  }
+
+  // the solver's numbers are read at every step, as the drives' are; made bad between steps,
+  // the drives give no effort until they are fixed
+  SolverSetting setting;
+  std::string problem;
+  if (valid && !SolverSetting::FromModel(m, solver_numeric_, &setting, &problem)) {
+    Warn(static_cast<int>(drives_.size()) + 1, "drive_envelope.envelope: %s%s; the drives give no effort",
+         problem.c_str(), "");
+    valid = false;
   }
   bool any = false;
   for (size_t k = 0; k < drives_.size(); k++) {
@@ -365,8 +392,13 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
     ImplicitDamping(m, d, dt);
     Response(m, d);
     FreeVelocity(dt, d);
-    Prepare(d, dt);
-    sweeps = Sweep(m, d, dt);
+    if (setting.kind == SolverKind::kExact) {
+      Prepare(d, dt);
+      sweeps = Sweep(m, d, dt);
+    } else {
+      if (setting.kind == SolverKind::kTgs) BiasVelocity(m, d, dt);
+      sweeps = Articulation(d, dt, setting);
+    }
   }
   for (size_t k = 0; k < drives_.size(); k++) {
     const Drive& drive = drives_[k];

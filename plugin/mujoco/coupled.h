@@ -34,9 +34,15 @@ class CoupledSolver {
  public:
   CoupledSolver(const mjModel* m, Structure structure);
 
-  // writes every drive's total effort to d->actuator_force; returns the iterations (Newton steps
-  // plus Gauss-Seidel sweeps; 0 when the linear solve was inside every envelope)
+  // writes every drive's total effort to d->actuator_force; returns the iterations (exact: Newton
+  // steps plus Gauss-Seidel sweeps, 0 when the linear solve was inside every envelope; pgs/tgs:
+  // the sweeps over the drives)
   int Compute(const mjModel* m, mjData* d);
+
+  // pgs/tgs: moves the drives' positions, which MuJoCo has just integrated with the end-of-step
+  // velocity, to where PhysX integrates them (PGS: the velocity after the position sweeps; TGS:
+  // per substep); called from the plugin's advance, once per Compute
+  void Advance(const mjModel* m, mjData* d);
 
   // row solves (clamp evaluations) of the last Compute
   int solves() const { return solves_; }
@@ -77,6 +83,8 @@ class CoupledSolver {
   void ImplicitDamping(const mjModel* m, const mjData* d, double dt);
   void Response(const mjModel* m, const mjData* d);
   void FreeVelocity(double dt, const mjData* d);
+  void HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const;
+  void RowsOf(const mjData* d, const mjtNum* half, double* out) const;
   void Prepare(const mjData* d, double dt);
   void LinearGuess();
   RowResult RowSolve(int r, double rest, double dt, const mjData* d);
@@ -84,6 +92,16 @@ class CoupledSolver {
   void Velocities();
   bool Newton(const mjData* d, double dt, int* iterations);
   int Sweep(const mjModel* m, const mjData* d, double dt);
+
+  // PhysX's articulation iteration (articulation.cc): from the free velocities and A, the rows
+  // in one Gauss-Seidel sweep per iteration, root to leaves; returns the sweeps
+  enum class Pass { kPgs, kTgsSubstep, kTgsVelocity };
+  int Articulation(const mjData* d, double dt, const SolverSetting& setting);
+  void Visit(int r, Pass pass, double dt, double span, double elapsed);
+  void Propagate(int r, double impulse);
+  void BiasVelocity(const mjModel* m, mjData* d, double dt);
+
+  int solver_numeric_ = -1;
 
   std::vector<Drive> drives_;
   std::vector<int> native_;
@@ -109,6 +127,12 @@ class CoupledSolver {
   std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
   std::vector<double> rest_, slope_;
   std::vector<RowResult> result_;
+  std::vector<ImplicitDriveDesc> desc_;  // per row, the step's drive law (pgs/tgs)
+  std::vector<double> moved_;            // per row, displacement since the step began (tgs)
+  std::vector<double> shift_;            // per row, PhysX's position minus MuJoCo's [rad or m]
+  bool shift_pending_ = false;
+  std::vector<double> bias_;             // per row, h*(M^-1 * velocity-dependent bias) (tgs)
+  std::vector<mjtNum> bias_force_;       // scratch over the dofs
 };
 
 }  // namespace drive_envelope::mujoco_plugin

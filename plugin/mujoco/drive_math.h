@@ -204,6 +204,53 @@ inline double ImplicitDriveEffort(double stiffness, double damping, double posit
   return impulse / dt;
 }
 
+// PhysX's ArticulationImplicitDriveDesc: the linear law of the implicit drive for one step, as
+// computeImplicitDriveParams sets it up (the Python reference's implicit_drive_desc). The
+// unclamped impulse of one solver iteration is ComputeDriveImpulse below [N*m*s or N*s]
+struct ImplicitDriveDesc {
+  double target_vel_plus_initial_bias = 0;  // [N*m*s or N*s]
+  double bias_coefficient = 0;              // impulse per unit displacement in the step
+  double vel_multiplier = 0;                // impulse per unit joint velocity (negative)
+  double impulse_multiplier = 0;            // weight of the accumulated impulse: 1 - x (PGS), 1 (TGS)
+  double target_pos_bias = 0;               // impulse per second elapsed (TGS) [N*m or N]
+};
+
+// computeImplicitDriveParams: dt is the span the spring integrates over (TGS: the substep, PGS:
+// the step), sim_dt the step; response is the DOF's unit response (M^-1)_ii
+inline ImplicitDriveDesc ComputeImplicitDriveParams(DriveType type, double stiffness,
+                                                    double damping, double dt, double sim_dt,
+                                                    double response, double geom_error,
+                                                    double target_velocity, bool is_tgs) {
+  double a = dt * (dt * stiffness + damping);
+  double b = dt * (damping * target_velocity);
+  double initial_bias = geom_error - (sim_dt - dt) * target_velocity;  // geom_error for PGS
+  double x, scale;
+  if (type == DriveType::kForce) {
+    x = response > 0 ? 1.0 / (1.0 + a * response) : 0.0;
+    scale = 1.0;
+  } else {
+    x = 1.0 / (1.0 + a);
+    scale = 1.0 / response;  // recipResponse: gains per unit inertia
+  }
+  ImplicitDriveDesc desc;
+  desc.bias_coefficient = stiffness * x * scale * dt;
+  desc.target_vel_plus_initial_bias = x * b * scale + desc.bias_coefficient * initial_bias;
+  desc.vel_multiplier = -x * a * scale;
+  desc.impulse_multiplier = is_tgs ? 1.0 : 1.0 - x;
+  desc.target_pos_bias = is_tgs ? desc.bias_coefficient * target_velocity : 0.0;
+  return desc;
+}
+
+// computeDriveImpulse: the unclamped drive impulse of one solver iteration, from the impulse
+// accumulated so far, the joint's current velocity, its displacement since the start of the step
+// and the time elapsed in it (the last two TGS only, 0 for PGS) [N*m*s or N*s]
+inline double ComputeDriveImpulse(const ImplicitDriveDesc& desc, double accumulated,
+                                  double joint_velocity, double delta_position, double elapsed) {
+  return accumulated * desc.impulse_multiplier + joint_velocity * desc.vel_multiplier +
+         desc.target_vel_plus_initial_bias - delta_position * desc.bias_coefficient +
+         elapsed * desc.target_pos_bias;
+}
+
 }  // namespace drive_envelope::mujoco_plugin
 
 #endif  // DRIVE_ENVELOPE_PLUGIN_MUJOCO_DRIVE_MATH_H_

@@ -298,6 +298,49 @@ int DriveParams::FromModel(const mjModel* m, int i, DriveParams* params, std::st
   return -1;
 }
 
+bool SolverSetting::FromModel(const mjModel* m, int id, SolverSetting* setting,
+                              std::string* error) {
+  SolverSetting out;
+  if (id < 0) {
+    *setting = out;
+    return true;
+  }
+  int size = m->numeric_size[id];
+  const mjtNum* value = m->numeric_data + m->numeric_adr[id];
+  std::string where = std::string("custom numeric '") + kSolverNumeric + "'";
+  if (size != 3 && size != 4) {
+    *error = where + " has " + std::to_string(size) +
+             " number(s): expected 'solver position_iterations velocity_iterations [constraints]' "
+             "(solver 0 exact, 1 pgs, 2 tgs)";
+    return false;
+  }
+  double kind = value[0], position = value[1], velocity = value[2];
+  if (!(kind == 0 || kind == 1 || kind == 2)) {
+    *error = where + "[0] (solver) = " + Number(kind) + ": expected 0 (exact), 1 (pgs) or 2 (tgs)";
+    return false;
+  }
+  if (!(position >= 1 && position <= kMaxIterations && position == std::floor(position))) {
+    *error = where + "[1] (position_iterations) = " + Number(position) +
+             ": expected an integer in [1, 255]";
+    return false;
+  }
+  if (!(velocity >= 0 && velocity <= kMaxIterations && velocity == std::floor(velocity))) {
+    *error = where + "[2] (velocity_iterations) = " + Number(velocity) +
+             ": expected an integer in [0, 255]";
+    return false;
+  }
+  if (size == 4 && value[3] != 0) {
+    *error = where + "[3] (constraints) = " + Number(value[3]) +
+             ": expected 0 (the drives are solved before MuJoCo's constraints)";
+    return false;
+  }
+  out.kind = static_cast<SolverKind>(static_cast<int>(kind));
+  out.position_iterations = static_cast<int>(position);
+  out.velocity_iterations = static_cast<int>(velocity);
+  *setting = out;
+  return true;
+}
+
 bool InstanceConfig::FromModel(const mjModel* m, int instance, InstanceConfig* config,
                                std::string* error) {
   InstanceConfig c;
@@ -357,6 +400,10 @@ bool Structure::Build(const mjModel* m, Structure* structure, std::string* error
     return false;
   }
 
+  s.solver_numeric = mj_name2id(m, mjOBJ_NUMERIC, kSolverNumeric);
+  SolverSetting setting;
+  if (!SolverSetting::FromModel(m, s.solver_numeric, &setting, error)) return false;
+
   std::sort(s.drives.begin(), s.drives.end(),
             [](const Drive& a, const Drive& b) { return a.dof < b.dof; });
   for (int i = 0; i < m->nactuator; i++) {
@@ -395,6 +442,10 @@ void Envelope::Compute(const mjModel* m, mjData* d, int instance) {
   }
 }
 
+void Envelope::Advance(const mjModel* m, mjData* d) {
+  if (solver_) solver_->Advance(m, d);
+}
+
 void Envelope::RegisterPlugin() {
   mjpPlugin plugin;
   mjp_defaultPlugin(&plugin);
@@ -427,6 +478,9 @@ void Envelope::RegisterPlugin() {
   };
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
     reinterpret_cast<Envelope*>(d->plugin_data[instance])->Compute(m, d, instance);
+  };
+  plugin.advance = +[](const mjModel* m, mjData* d, int instance) {
+    reinterpret_cast<Envelope*>(d->plugin_data[instance])->Advance(m, d);
   };
   mjp_registerPlugin(&plugin);
 }

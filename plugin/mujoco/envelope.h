@@ -58,6 +58,23 @@ struct DriveParams {
   static int FromModel(const mjModel* m, int i, DriveParams* params, std::string* error);
 };
 
+// how the drives of a model are solved each step: the model's custom numeric kSolverNumeric,
+// [solver, position_iterations, velocity_iterations, constraints], read at every step like the
+// drives' numbers; absent: the exact coupled solve
+constexpr char kSolverNumeric[] = "drive_envelope_solver";
+enum class SolverKind : int { kExact = 0, kPgs = 1, kTgs = 2 };
+constexpr int kMaxIterations = 255;  // PhysX's bound on an articulation's iteration counts
+
+struct SolverSetting {
+  SolverKind kind = SolverKind::kExact;
+  int position_iterations = 1;   // [1, 255]: PGS's position sweeps, TGS's substeps
+  int velocity_iterations = 0;   // [0, 255]; PGS runs at least one (PhysX's writeback sweep)
+
+  // reads numeric id (-1: absent, the exact solve); on a bad value returns false and writes the
+  // reason to error
+  static bool FromModel(const mjModel* m, int id, SolverSetting* setting, std::string* error);
+};
+
 // the configuration of one plugin instance: structural, read when an mjData is made
 struct InstanceConfig {
   DriveType drive_type = DriveType::kForce;
@@ -83,6 +100,7 @@ struct Drive {
 struct Structure {
   std::vector<Drive> drives;     // in dof order (root to leaves)
   std::vector<int> native;       // actuators of no instance of this plugin (forces predicted)
+  int solver_numeric = -1;       // id of the custom numeric kSolverNumeric, -1: none (exact)
 
   // builds it from all instances; on bad input returns false and writes the reason to error
   static bool Build(const mjModel* m, Structure* structure, std::string* error);
@@ -96,6 +114,9 @@ class Envelope {
 
   // the leader writes every drive's total effort to d->actuator_force (idempotent); others: none
   void Compute(const mjModel* m, mjData* d, int instance);
+
+  // the leader moves the drives' positions to PhysX's integration (solver pgs/tgs); others: none
+  void Advance(const mjModel* m, mjData* d);
 
   // adds the plugin to MuJoCo's global registry
   static void RegisterPlugin();

@@ -6,7 +6,8 @@ solving every drive of the model together each step. Load it once per process wi
 part of ``make setup``), then either write ``<plugin plugin="drive_envelope.envelope">`` actuators
 in MJCF, call :func:`add_drive` on a ``mujoco.MjSpec``, or run ``drive-envelope mujoco apply``.
 A drive's numbers live in the model (``actuator_dynprm``, :data:`DYNPRM_SLOTS`):
-:func:`set_envelope` and :func:`set_gains` change them between steps. mujoco itself is imported
+:func:`set_envelope` and :func:`set_gains` change them between steps; :func:`set_solver` chooses
+the exact coupled solve (the default) or PhysX's PGS/TGS iteration over the drives. mujoco itself is imported
 only inside these functions.
 
 MuJoCo's units are unspecified; drive_envelope assumes the model is SI (rad, m, s, kg): efforts in
@@ -31,6 +32,13 @@ from drive_envelope._src.adapters.mujoco.params import (
     set_gains,
 )
 from drive_envelope._src.adapters.mujoco.readout import drive_state, rollout_operating_points
+from drive_envelope._src.adapters.mujoco.solver import (
+    SOLVER_NUMERIC,
+    SOLVERS,
+    MjSolver,
+    get_solver,
+    set_solver,
+)
 from drive_envelope._src.adapters.mujoco.spec import INPUTS, MjDrive, add_drive, add_drives, plugin_config
 from drive_envelope._src.adapters.mujoco.stand import stand_spec
 
@@ -41,8 +49,11 @@ __all__ = [
     "NO_LIMIT",
     "PARAM_BOUND",
     "PLUGIN_NAME",
+    "SOLVERS",
+    "SOLVER_NUMERIC",
     "MjDrive",
     "MjDriveInfo",
+    "MjSolver",
     "PluginError",
     "add_drive",
     "add_drives",
@@ -51,6 +62,7 @@ __all__ = [
     "drive_state",
     "get_envelope",
     "get_gains",
+    "get_solver",
     "load_plugin",
     "model_drives",
     "plugin_config",
@@ -58,6 +70,7 @@ __all__ = [
     "rollout_operating_points",
     "set_envelope",
     "set_gains",
+    "set_solver",
     "stand_spec",
     "write_mjcf",
 ]

@@ -46,6 +46,7 @@ class PluginError(DriveEnvelopeError, RuntimeError):
 
 PLUGIN_SOURCES = (
     "CMakeLists.txt",
+    "articulation.cc",
     "coupled.cc",
     "coupled.h",
     "drive_math.h",
