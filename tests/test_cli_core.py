@@ -99,7 +99,7 @@ def test_missing_file_exits_2() -> None:
 
 
 def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> None:
-    """Give new files the umask mode, keep a replaced file's mode, and refuse a missing folder."""
+    """Give new files the umask mode, keep a replaced file's mode, and refuse a file as a folder."""
     import os
     import stat
 
@@ -115,8 +115,8 @@ def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> Non
     atomic_write_text(fresh, "b")
     assert stat.S_IMODE(fresh.stat().st_mode) == 0o640
     assert fresh.read_text() == "b"
-    with pytest.raises(InputError, match="does not exist"):
-        atomic_write_text(tmp_path / "missing" / "x.txt", "c")
+    with pytest.raises(InputError, match=r"new\.txt' is a file, not a folder"):
+        atomic_write_text(fresh / "x.txt", "c")
 
 
 @pytest.mark.parametrize(

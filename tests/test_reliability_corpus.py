@@ -110,6 +110,9 @@ class _Paths:
         return CORPUS / name
 
     def argument(self, text: str, case: dict[str, Any]) -> str:
+        if text.startswith("{") and "}/" in text:  # {PATH}/rest: a name below a file (not a folder)
+            head, _, rest = text.partition("}/")
+            return f"{self.argument(head + '}', case)}/{rest}"
         if not (text.startswith("{") and text.endswith("}")):
             return text
         name = text[1:-1]
@@ -179,7 +182,8 @@ def test_corpus_is_well_formed() -> None:
         assert case["error"] and case["run"], case["id"]
         uses_input = any("{input}" in argv for argv in case["run"])
         assert uses_input == ("input" in case), f"{case['id']}: input and {{input}} go together"
-        for name in [case.get("input", "")] + [a[1:-1] for argv in case["run"] for a in argv if a[:1] == "{"]:
+        placeholders = [a[1:].partition("}")[0] for argv in case["run"] for a in argv if a[:1] == "{"]
+        for name in [case.get("input", ""), *placeholders]:
             kind = name.partition("/")[0]
             if kind == "generated":
                 assert name.partition("/")[2] in GENERATED, f"{case['id']}: no generator for {name}"
@@ -190,7 +194,7 @@ def test_corpus_is_well_formed() -> None:
 def test_every_corpus_file_is_used() -> None:
     """Run every file of tests/corpus through at least one case (no forgotten input)."""
     used = {case.get("input", "") for case in CASES}
-    used |= {a[1:-1] for case in CASES for argv in case["run"] for a in argv if a[:1] == "{"}
+    used |= {a[1:].partition("}")[0] for case in CASES for argv in case["run"] for a in argv if a[:1] == "{"}
     files = {str(p.relative_to(CORPUS)) for p in CORPUS.rglob("*") if p.is_file() and p.name != "cases.toml"}
     assert files - used == set()
 

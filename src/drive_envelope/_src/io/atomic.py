@@ -7,21 +7,28 @@ A failed or interrupted command therefore never leaves a half-written output fil
   and its name always matches that pattern;
 * a target that is a symbolic link is written through: the link stays, the file it points to is
   replaced (so the real asset is edited, not the link turned into a copy);
+* a target that is not a regular file is never replaced by one: a character device (``/dev/null``,
+  a terminal, ``-o /dev/stdout``) or a FIFO is written through once the output is complete (it is
+  made in a temporary file of the system's temporary folder first, so a failed command still
+  writes nothing); a FIFO without a reader, a block device and a socket are refused;
+* missing folders of the target are created (and removed again when the write fails);
 * a read-only target is refused unless ``force=True``: a 0444 file is somebody's way of saying
   "do not edit this";
 * the new file gets the mode of the file it replaces (else the umask's default) and, where the
   process may, its owner and group.
 
-Every failure is an :class:`~drive_envelope._src.errors.InputError` naming the file: a missing
-folder, a folder given as the file, no permission, a full disk.
+Every failure is an :class:`~drive_envelope._src.errors.InputError` naming the file: a file where
+a folder should be, a folder given as the file, a name too long, no permission, a full disk.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import os
 import signal
+import stat
 import tempfile
 import threading
 from collections.abc import Iterator
@@ -29,6 +36,7 @@ from pathlib import Path
 from types import FrameType
 
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import check_path_name, node_kind
 
 __all__ = [
     "TEMPORARY_PATTERN",
@@ -55,20 +63,74 @@ def check_writable(path: str | os.PathLike[str], *, force: bool = False) -> None
     """Refuse now what :func:`atomic_path` would refuse at the end of a long run.
 
     Raises:
-        InputError: the folder does not exist, the target is a folder, or it is read-only (without
-            ``force``).
+        InputError: a name too long, a file where a folder should be, the target is a folder, a
+            block device or a socket, or it is read-only (without ``force``).
     """
-    _check_target(write_target(path), Path(path), force)
+    shown = Path(path)
+    check_path_name(shown)
+    if _stream_kind(shown) is None:
+        _check_target(write_target(shown), shown, force)
+
+
+def _stream_kind(shown: Path) -> str | None:
+    """What ``shown`` is when it is a FIFO or a character device (written through), else None.
+
+    None for a regular or missing file; a block device or a socket is refused.
+    """
+    try:
+        # os.stat follows every link, /dev/stdout's /proc/self/fd/1 (a pipe, a terminal) included
+        mode = os.stat(shown).st_mode
+    except OSError:
+        return None  # missing (or unreachable): _check_target names the reason
+    kind = node_kind(mode)
+    if kind is None:
+        return None
+    if stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
+        return kind
+    raise InputError(f"{shown}: cannot write: it is {kind}; expected a file name")
 
 
 def _check_target(target: Path, shown: Path, force: bool) -> None:
-    directory = target.parent if str(target.parent) else Path(".")
-    if not directory.is_dir():
-        raise InputError(f"{shown}: cannot write: folder {str(directory)!r} does not exist")
+    check_path_name(target, str(shown))
     if target.is_dir():
         raise InputError(f"{shown}: cannot write: it is a folder; expected a file name")
+    folder = _existing_ancestor(target)
+    if not folder.is_dir():
+        raise InputError(f"{shown}: cannot write: {str(folder)!r} is a file, not a folder")
     if target.exists() and not force and _read_only(target):
         raise InputError(f"{shown}: cannot write: the file is read-only (pass --force to replace it)")
+
+
+def _existing_ancestor(target: Path) -> Path:
+    """The nearest folder above ``target`` that exists (or the file in the way of one)."""
+    folder = target.parent if str(target.parent) else Path(".")
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    return folder
+
+
+def _make_folders(target: Path, shown: Path) -> list[Path]:
+    """Create the missing folders above ``target``; return them, deepest first (to undo)."""
+    missing = []
+    folder = target.parent if str(target.parent) else Path(".")
+    while not folder.exists() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    for created in reversed(missing):
+        try:
+            created.mkdir()
+        except FileExistsError:
+            pass  # another writer made it meanwhile
+        except OSError as exc:
+            _remove_folders(missing)
+            raise InputError(f"{shown}: cannot create folder {str(created)!r}: {_reason(exc)}") from None
+    return missing
+
+
+def _remove_folders(folders: list[Path]) -> None:
+    for folder in folders:  # deepest first; one another writer has filled meanwhile stays
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def _read_only(target: Path) -> bool:
@@ -102,33 +164,71 @@ def atomic_path(path: str | os.PathLike[str], *, force: bool = False) -> Iterato
     """Yield a temporary path beside ``path``; on success it is renamed to ``path``, else removed.
 
     The temporary file keeps the target's suffix so writers that pick a format from it (matplotlib,
-    USD) still work.
+    USD) still work. A FIFO or character device target gets the finished file's bytes instead.
 
     Args:
-        path: The output file; a symlink is written through to its target.
+        path: The output file; a symlink is written through to its target, missing folders are
+            created.
         force: Replace a read-only target.
 
     Raises:
-        InputError: the folder does not exist, the target is a folder or read-only (without
-            ``force``), or the file cannot be created or filled (no permission, disk full).
+        InputError: a name too long, a file where a folder should be, the target is a folder, a
+            block device, a socket, a FIFO without a reader or read-only (without ``force``), or the
+            file cannot be created or filled (no permission, disk full).
     """
     shown = Path(path)
+    check_path_name(shown)
+    kind = _stream_kind(shown)
+    if kind is not None:
+        with _streamed(shown, kind) as tmp:
+            yield tmp
+        return
     target = write_target(shown)
     _check_target(target, shown, force)
+    created = _make_folders(target, shown)
     try:
         fd, tmp_name = tempfile.mkstemp(
-            prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=target.parent or Path(".")
+            prefix=f".{target.name[:200]}.", suffix=f".tmp{target.suffix}", dir=target.parent or Path(".")
         )
     except OSError as exc:
-        raise InputError(f"{shown}: cannot write: {exc.strerror}") from None
+        _remove_folders(created)
+        raise InputError(f"{shown}: cannot write: {_reason(exc)}") from None
     os.close(fd)
     tmp = Path(tmp_name)
+    done = False
     try:
         with _cleanup_on_sigterm():
             try:
                 yield tmp
                 _copy_metadata(target, tmp)
                 os.replace(tmp, target)
+                done = True
+            except _Interrupted:
+                raise SystemExit(128 + signal.SIGTERM) from None
+    except OSError as exc:
+        raise InputError(f"{shown}: cannot write: {_reason(exc)}") from None
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if not done:
+            _remove_folders(created)
+
+
+@contextlib.contextmanager
+def _streamed(shown: Path, kind: str) -> Iterator[Path]:
+    """Yield a temporary path in the system's temporary folder; on success copy it into ``shown``.
+
+    The device or FIFO is opened only once the output is complete, so a failed command writes
+    nothing to it, and a FIFO's reader sees one whole file.
+    """
+    fd, tmp_name = tempfile.mkstemp(prefix="drive-envelope.", suffix=f".tmp{shown.suffix[:32]}")
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        with _cleanup_on_sigterm():
+            try:
+                yield tmp
+                _copy_into(tmp, shown, kind)
             except _Interrupted:
                 raise SystemExit(128 + signal.SIGTERM) from None
     except OSError as exc:
@@ -138,9 +238,34 @@ def atomic_path(path: str | os.PathLike[str], *, force: bool = False) -> Iterato
             tmp.unlink()
 
 
+def _copy_into(tmp: Path, shown: Path, kind: str) -> None:
+    """Write the bytes of ``tmp`` through ``shown`` (a FIFO or a character device), never replacing it."""
+    try:
+        # O_NONBLOCK: a FIFO without a reader fails at once (ENXIO) instead of waiting for ever
+        out = os.open(shown, os.O_WRONLY | os.O_NONBLOCK)
+    except OSError as exc:
+        if exc.errno == errno.ENXIO:
+            raise InputError(
+                f"{shown}: cannot write: it is {kind} and nothing reads from it (start the reader first)"
+            ) from None
+        raise
+    try:
+        flags = fcntl.fcntl(out, fcntl.F_GETFL)
+        fcntl.fcntl(out, fcntl.F_SETFL, flags & ~os.O_NONBLOCK)  # now block as a plain write would
+        with open(tmp, "rb") as source:
+            while block := source.read(1 << 20):
+                view = memoryview(block)
+                while view:
+                    view = view[os.write(out, view) :]
+    finally:
+        os.close(out)
+
+
 def _reason(exc: OSError) -> str:
     if exc.errno == errno.ENOSPC:
         return "no space left on the device"
+    if exc.errno == errno.EPIPE:
+        return "the reader closed the pipe before the output was complete"
     return exc.strerror or str(exc)
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import read_input_bytes
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -51,15 +52,21 @@ class _DuplicateKey(Exception):
 _MAPPING_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 
 
-def read_text(path: str | os.PathLike[str]) -> str:
-    """Read a UTF-8 text file; a missing or unreadable file is a one-line :class:`InputError`."""
-    file = Path(path)
+def read_text(path: str | os.PathLike[str], *, what: str = "file") -> str:
+    """Read a UTF-8 text file of at most :data:`~.paths.MAX_TEXT_BYTES` [bytes].
+
+    Raises:
+        InputError: one line naming the file: missing, a folder, not a regular file (a FIFO, a
+            device such as ``/dev/zero``), too large, a name too long, or not UTF-8.
+    """
+    data = read_input_bytes(path, what=what)
     try:
-        return file.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{file}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{file}: cannot read: {exc}") from None
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise InputError(
+            f"{Path(path)}: cannot read: byte 0x{data[exc.start]:02x} on line {line} is not UTF-8 text"
+        ) from None
 
 
 def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
