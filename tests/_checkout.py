@@ -1,4 +1,4 @@
-"""A fresh copy of the checkout's tracked files, as a clone would have them (for the docs and packaging tests)."""
+"""A fresh copy of the checkout's tracked files, as a clone has them (the docs and packaging tests)."""
 
 from __future__ import annotations
 

@@ -16,12 +16,14 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
 from _checkout import ROOT, copy_checkout, tracked_files
 
 pytestmark = pytest.mark.slow
 
-# what pyproject.toml's [tool.hatch.build.targets.sdist] only-include names
+# what pyproject.toml's [tool.hatch.build.targets.sdist] only-include names (hatch adds .gitignore)
 SDIST_ROOTS = (
+    ".gitignore",
     "src/drive_envelope/",
     "plugin/mujoco/",
     "tests/",
@@ -82,9 +84,9 @@ def test_wheel_holds_the_package_data_license_and_plugin_sources(dist: dict[str,
     package = {n.removeprefix("src/") for n in tracked if n.startswith("src/drive_envelope/")}
     # every tracked file of the package is in the wheel (the catalog and maps included), nothing else of it
     assert package <= names, sorted(package - names)
-    assert {n for n in names if n.startswith("drive_envelope/") and not n.startswith("drive_envelope/_plugin/")} == (
-        package
-    )
+    assert {
+        n for n in names if n.startswith("drive_envelope/") and not n.startswith("drive_envelope/_plugin/")
+    } == (package)
     catalog = {n for n in names if n.startswith("drive_envelope/catalog/") and n.endswith(".toml")}
     maps = {n for n in names if n.startswith("drive_envelope/maps/") and n.endswith(".toml")}
     assert len(catalog) >= 60 and "drive_envelope/catalog/tmotor-ak80-6.toml" in catalog
@@ -147,4 +149,8 @@ def test_unpacked_wheel_runs_without_the_checkout(dist: dict[str, Path], tmp_pat
     )
     assert run.returncode == 0, run.stderr[-3000:]
     # the catalog's AK80-6 is rated 12 N*m at the output (its datasheet file)
-    assert run.stdout.split() == ["drive_envelope/_plugin/mujoco", "drive_envelope/maps/unitree-go2.toml", "12.0"]
+    assert run.stdout.split() == [
+        "drive_envelope/_plugin/mujoco",
+        "drive_envelope/maps/unitree-go2.toml",
+        "12.0",
+    ]
