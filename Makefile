@@ -1,5 +1,5 @@
 # drive-envelope: set-up and the two entry points of the README (`make demo`, `make test`).
-# Both create and reuse a virtual environment in .venv (git-ignored).
+# Both create and reuse a virtual environment in .venv (git-ignored); the demo installs only what it needs.
 
 PYTHON ?= python3
 VENV := .venv
@@ -13,11 +13,23 @@ STAMP := $(VENV)/.installed-$(subst ,,$(EXTRAS))
 
 .PHONY: setup demo test lint typecheck pytest test-mjlab bench clean
 
+# the demo needs the core and matplotlib only; the full set-up (a superset) marks it done too, so
+# `make test` then `make demo` installs nothing, and `make demo` then `make test` adds the engines
+DEMO_STAMP := $(VENV)/.installed-demo
+PIP := $(BIN)/python -m pip install -q --disable-pip-version-check
+
 $(STAMP): pyproject.toml Makefile
+	@echo "== set-up: .venv with drive-envelope [$(EXTRAS)] (every engine; minutes on a fresh machine)"
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install -q --disable-pip-version-check --upgrade pip
-	$(BIN)/python -m pip install -q --disable-pip-version-check -e '.[$(EXTRAS)]'
-	$(BIN)/python -m pip install -q --disable-pip-version-check --no-deps '$(ISAACLAB)'
+	$(PIP) --upgrade pip
+	$(PIP) -e '.[$(EXTRAS)]'
+	$(PIP) --no-deps '$(ISAACLAB)'
+	touch $@ $(DEMO_STAMP)
+
+$(DEMO_STAMP): pyproject.toml Makefile
+	@echo "== set-up: .venv with drive-envelope and matplotlib (the demo's needs; \`make test\` adds the engines)"
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(PIP) -e '.[plot]'
 	touch $@
 
 # the native MuJoCo actuator plugin, built against the installed mujoco wheel's headers and library
@@ -28,7 +40,8 @@ $(PLUGIN): $(STAMP) $(wildcard plugin/mujoco/*.cc plugin/mujoco/*.h) plugin/mujo
 setup: $(STAMP) $(PLUGIN)
 
 # the main job: datasheet -> envelope -> simulated actuator -> plot (files in build/demo/)
-demo: setup
+demo: $(DEMO_STAMP)
+	@echo "== demo: datasheet -> envelope -> simulated actuator -> plot, into build/demo/"
 	mkdir -p build/demo
 	$(BIN)/drive-envelope derive tmotor-ak80-6 -o build/demo/tmotor-ak80-6.toml
 	$(BIN)/drive-envelope envelope show build/demo/tmotor-ak80-6.toml
