@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
+from drive_envelope._src.adapters.isaaclab import compat
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.values import read_envelope_value
@@ -30,7 +32,57 @@ from drive_envelope._src.values import read_envelope_value
 __all__ = ["ENVELOPE_ATTRIBUTES", "build", "resolve_datasheets", "si_value"]
 
 ENVELOPE_ATTRIBUTES = ("effort_limit", *ENVELOPE_FIELDS[1:])
-"""The actuator's envelope tensors, in the order of the envelope fields: max_effort is ``effort_limit``."""
+"""The actuator's envelope tensors in Isaac Lab 2.3, in the order of the envelope fields."""
+
+
+def envelope_attributes() -> tuple[str, ...]:
+    """The actuator's envelope tensors, in the order of the envelope fields.
+
+    max_effort is Isaac Lab's effort limit (2.3 ``effort_limit``, 3.0 ``actuator_effort_limit``).
+    """
+    return (compat.api().effort_limit, *ENVELOPE_FIELDS[1:])
+
+
+def _limits_in_si(cfg: Any, names: Any) -> None:
+    """Read the cfg's effort and speed limits given as strings with units as SI numbers, in place.
+
+    Isaac Lab's own parser takes numbers and ``{regex: number}`` dicts only; the envelope fields take
+    ``"23.5 N*m"``, so the limits beside them do too (and a wrong unit is a one-line InputError).
+    """
+    groups = (
+        ("max_effort", (names.effort_limit, *names.deprecated_effort_limits)),
+        ("max_actuator_velocity", (names.velocity_limit, *names.deprecated_velocity_limits)),
+    )
+    for field, attributes in groups:
+        for attribute in attributes:
+            value = getattr(cfg, attribute, None)
+            if value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)):
+                continue
+            where = f"{_CFG}.{attribute}"
+            if isinstance(value, Mapping):
+                value = {str(k): read_envelope_value(v, field, f"{where}[{k!r}]") for k, v in value.items()}
+            elif isinstance(value, str):
+                value = read_envelope_value(value, field, where)
+            else:
+                raise InputError(
+                    f"{where}: got {value!r}; expected a number, a string with units or a "
+                    "{joint regex: value} dict"
+                )
+            setattr(cfg, attribute, value)
+
+
+def _simulated(limits: Mapping[str, Any], names: Any, like: Any) -> Any:
+    """The simulation's effort limit the articulation passed (tensor or number; none: inf), as ``like``."""
+    import torch
+
+    given = limits.get(names.effort_limit)
+    for name in names.deprecated_effort_limits:
+        if given is None:
+            given = limits.get(name)
+    if isinstance(given, torch.Tensor):
+        return given.to(like).expand_as(like).clone()
+    return torch.full_like(like, math.inf if given is None else float(given))
+
 _DEFAULTS = {
     "max_actuator_velocity": math.inf,
     "velocity_dependent_resistance": 0.0,
@@ -123,41 +175,45 @@ def build() -> tuple[type, type]:
             device: str,
             stiffness: Any = 0.0,
             damping: Any = 0.0,
-            armature: Any = 0.0,
-            friction: Any = 0.0,
-            dynamic_friction: Any = 0.0,
-            viscous_friction: Any = 0.0,
-            effort_limit: Any = torch.inf,
-            velocity_limit: Any = torch.inf,
+            **limits: Any,
         ) -> None:
-            """Build the actuator as ``Articulation._process_actuators_cfg`` does (Isaac Lab's keywords).
+            """Build the actuator as Isaac Lab's articulation does, with that Isaac Lab's keywords.
 
-            The defaults of stiffness ... velocity_limit are the simulation's values for these joints
-            (from the USD through PhysX); the cfg's values replace them, Isaac Lab's rule.
+            ``stiffness``, ``damping`` and ``limits`` are the simulation's values for these joints
+            (from the USD), passed on to Isaac Lab's ``IdealPDActuator`` unchanged: 2.3 gives
+            armature, friction, dynamic_friction, viscous_friction, effort_limit and velocity_limit,
+            3.0 actuator_effort_limit and actuator_velocity_limit (``compat``). The cfg's values
+            replace them, Isaac Lab's rule.
 
             Raises:
-                InputError: an envelope value that is negative, NaN, of the wrong unit or matches no
-                    joint, or a datasheet that cannot be read.
+                InputError: an envelope or limit value that is negative, NaN, of the wrong unit or
+                    matches no joint, or a datasheet that cannot be read.
             """
-            super().__init__(
-                cfg,
-                joint_names,
-                joint_ids,
-                num_envs,
-                device,
-                stiffness=stiffness,
-                damping=damping,
-                armature=armature,
-                friction=friction,
-                dynamic_friction=dynamic_friction,
-                viscous_friction=viscous_friction,
-                effort_limit=effort_limit,
-                velocity_limit=velocity_limit,
-            )
+            names = compat.api()
+            _limits_in_si(cfg, names)
+            try:
+                super().__init__(
+                    cfg,
+                    joint_names,
+                    joint_ids,
+                    num_envs,
+                    device,
+                    stiffness=stiffness,
+                    damping=damping,
+                    **limits,
+                )
+            except ValueError as exc:  # Isaac Lab's parsing of a cfg value: one line naming the cfg
+                raise InputError(f"{_CFG}: {' '.join(str(exc).split())}") from None
             sheets = resolve_datasheets(cfg.datasheet, joint_names) if cfg.datasheet is not None else {}
-            if cfg.effort_limit is None and sheets:
-                # precedence: the cfg's own effort_limit, then the datasheet, then the simulation's value
-                self.effort_limit = self._from_sheets(sheets, "max_effort", self.effort_limit)
+            effort = compat.cfg_value(cfg, names.effort_limit, names.deprecated_effort_limits)
+            if sheets and (effort is None or isinstance(effort, Mapping)):
+                # precedence per joint: the cfg's own effort limit, then the datasheet, then the
+                # simulation's value (a dict names some joints only: the others keep the datasheet's)
+                simulated = _simulated(limits, names, self.computed_effort)
+                tensor = self._from_sheets(sheets, "max_effort", simulated)
+                if effort is not None:
+                    tensor = self._apply(names.effort_limit, effort, tensor)
+                setattr(self, names.effort_limit, tensor)
             for field in ENVELOPE_FIELDS[1:]:
                 value = getattr(cfg, field)
                 tensor = torch.full_like(self.computed_effort, _DEFAULTS[field])
@@ -166,10 +222,38 @@ def build() -> tuple[type, type]:
                 if value is not None:
                     tensor = self._apply(field, si_value(value, field), tensor)
                 setattr(self, field, tensor)
-            for attribute in ENVELOPE_ATTRIBUTES:
+            for attribute in envelope_attributes():
                 self._check(attribute, getattr(self, attribute))
                 setattr(self, f"default_{attribute}", getattr(self, attribute).clone())
             self._joint_vel = torch.zeros_like(self.computed_effort)
+            self._warn_speed_limit(cfg, names)
+
+        @property
+        def max_effort(self) -> Any:
+            """max_effort [N*m or N], ``(num_envs, num_joints)``: Isaac Lab's effort-limit tensor.
+
+            The same tensor as 2.3's ``effort_limit`` and 3.0's ``actuator_effort_limit``.
+            """
+            return getattr(self, compat.api().effort_limit)
+
+        def _warn_speed_limit(self, cfg: Any, names: Any) -> None:
+            """Warn once where the cfg's speed limit is above max_actuator_velocity (it never binds)."""
+            if compat.cfg_value(cfg, names.velocity_limit, names.deprecated_velocity_limits) is None:
+                return  # the simulation's joint limit: the envelope's cap below it is the point
+            limit = getattr(self, names.velocity_limit)
+            below = (self.max_actuator_velocity < limit)[0]
+            if bool(below.any()):
+                column = int(torch.nonzero(below)[0])
+                joints = [name for name, low in zip(self.joint_names, below.tolist(), strict=True) if low]
+                vmax = float(self.max_actuator_velocity[0, column])
+                warnings.warn(
+                    f"{_CFG}: max_actuator_velocity {vmax:g} is below "
+                    f"{names.velocity_limit} {float(limit[0, column]):g} [rad/s or m/s] on {joints}: the "
+                    f"envelope stops these joints at max_actuator_velocity, so {names.velocity_limit} "
+                    "above it never binds (lower it, or check the datasheet's speed)",
+                    UserWarning,
+                    stacklevel=3,
+                )
 
         def _apply(self, field: str, value: Any, base: Any) -> Any:
             """``base`` with the cfg's value on all joints, or per regex (others keep ``base``)."""
@@ -199,7 +283,7 @@ def build() -> tuple[type, type]:
                 bad |= torch.isinf(values)
             if bool(bad.any()):
                 env, column = (int(i) for i in torch.nonzero(bad)[0])
-                field = "max_effort (effort_limit)" if attribute == "effort_limit" else attribute
+                field = f"max_effort ({attribute})" if attribute == envelope_attributes()[0] else attribute
                 expected = ">= 0 and finite" if finite_only else ">= 0"
                 raise InputError(
                     f"{_CFG}: {field} of joint {self.joint_names[column]!r} is "
@@ -210,7 +294,7 @@ def build() -> tuple[type, type]:
         def envelope(self) -> Any:
             """The envelope the clip uses now: :class:`EnvelopeTensors` of ``(num_envs, num_joints)``."""
             return EnvelopeTensors(
-                max_effort=self.effort_limit,
+                max_effort=self.max_effort,
                 max_actuator_velocity=self.max_actuator_velocity,
                 velocity_dependent_resistance=self.velocity_dependent_resistance,
                 speed_effort_gradient=self.speed_effort_gradient,
@@ -228,6 +312,15 @@ def build() -> tuple[type, type]:
                 ``control_action`` with ``joint_efforts`` = the applied effort [N*m or N] and no
                 position or velocity targets (the simulation's drive gains are 0).
             """
+            for name in ("joint_positions", "joint_velocities", "joint_efforts"):
+                given = getattr(control_action, name, None)
+                if given is not None and given.dtype != self.computed_effort.dtype:
+                    kind = self.computed_effort.dtype
+                    raise InputError(
+                        f"{type(self).__name__}.compute: action {name} are {given.dtype}, Isaac Lab's joint "
+                        f"buffers {kind}; set the targets as {kind} "
+                        "(e.g. robot.set_joint_position_target(targets.float()))"
+                    )
             self._joint_vel[:] = joint_vel
             return super().compute(control_action, joint_pos, joint_vel)
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from drive_envelope._src.adapters.isaaclab.actuator import ENVELOPE_ATTRIBUTES
 from drive_envelope._src.errors import InputError
 
 __all__ = ["randomize_actuator_envelope"]
@@ -54,10 +53,11 @@ def randomize_actuator_envelope(
 
     Args:
         env: The Isaac Lab environment (``env.scene[asset_cfg.name]`` is the articulation).
-        env_ids: Environments to randomize (None: all).
+        env_ids: Environments to randomize: indices, a slice, or None (all).
         asset_cfg: ``SceneEntityCfg`` naming the asset and its joints (``joint_ids``).
-        max_effort_distribution_params: ``(low, high)`` (or ``(mean, std)``) for ``effort_limit``
-            [N*m or N, or a factor for ``"scale"``]; None leaves it.
+        max_effort_distribution_params: ``(low, high)`` (or ``(mean, std)``) for max_effort, Isaac
+            Lab's effort limit (2.3 ``effort_limit``, 3.0 ``actuator_effort_limit``) [N*m or N, or a
+            factor for ``"scale"``]; None leaves it.
         max_actuator_velocity_distribution_params: The same for max_actuator_velocity [rad/s or m/s].
         velocity_dependent_resistance_distribution_params: The same for R [N*m*s/rad or N*s/m].
         speed_effort_gradient_distribution_params: The same for G [(rad/s)/(N*m) or (m/s)/N].
@@ -70,7 +70,7 @@ def randomize_actuator_envelope(
     import torch
     from isaaclab.utils import math as math_utils
 
-    from drive_envelope._src.adapters.isaaclab.actuator import build
+    from drive_envelope._src.adapters.isaaclab.actuator import build, envelope_attributes
 
     if operation not in _OPERATIONS:
         raise InputError(
@@ -83,7 +83,7 @@ def randomize_actuator_envelope(
     sample = getattr(math_utils, f"sample_{distribution}")
     ranges = dict(
         zip(
-            ENVELOPE_ATTRIBUTES,
+            envelope_attributes(),
             (
                 max_effort_distribution_params,
                 max_actuator_velocity_distribution_params,
@@ -102,8 +102,10 @@ def randomize_actuator_envelope(
     asset = env.scene[asset_cfg.name]
     groups: list[Any] = [a for a in asset.actuators.values() if isinstance(a, actuator_class)]
     for actuator in groups:
-        device = actuator.effort_limit.device
-        rows = torch.arange(actuator.effort_limit.shape[0], device=device) if env_ids is None else env_ids
+        device = actuator.max_effort.device
+        every = torch.arange(actuator.max_effort.shape[0], device=device)
+        # None and slice(None) (what EventManager.apply passes without env_ids) both mean every env
+        rows = every[env_ids] if isinstance(env_ids, slice) else every if env_ids is None else env_ids
         rows = torch.as_tensor(rows, device=device)
         columns = _columns(actuator, asset_cfg.joint_ids, device)
         for attribute, params in ranges.items():

@@ -94,55 +94,119 @@ def author_implicit_envelopes(
         joint_names_expr=[re.escape(name) for name in envelopes],
         stiffness=dict(stiffness) if isinstance(stiffness, Mapping) else stiffness,
         damping=dict(damping) if isinstance(damping, Mapping) else damping,
-        effort_limit_sim=None,
-        velocity_limit_sim=None,
-    )
+    )  # the effort and speed limits stay None (2.3's and 3.0's default): Isaac Lab keeps the USD's
     return ImplicitEnvelopeSetup(usd_path=written[0], envelopes=envelopes, actuator=actuator)
 
 
-def _values_for(value: Any, joint: str) -> float | None:
-    """An Isaac Lab cfg value (float or ``{regex: float}``) for one joint; None when unset there."""
+def _patterns(actuator: Any) -> list[re.Pattern[str]]:
+    """The cfg's ``joint_names_expr`` compiled (empty: every joint), or one InputError naming it."""
+    given = getattr(actuator, "joint_names_expr", None)
+    if given is None:
+        return []
+    if isinstance(given, str):
+        raise InputError(
+            f"joint_names_expr = {given!r}: a string; expected a list of joint regexes, as Isaac Lab "
+            f"reads it (e.g. [{given!r}])"
+        )
+    compiled = []
+    for pattern in given:
+        try:
+            compiled.append(re.compile(str(pattern)))
+        except re.error as exc:
+            raise InputError(f"joint_names_expr: {pattern!r} is not a regex ({exc})") from None
+    return compiled
+
+
+def _value_for(value: Any, joint: str, field: str) -> float | None:
+    """An Isaac Lab cfg value (float or ``{regex: float}``) for one joint; None when unset.
+
+    A dict that names some joints of the group gives the others 0: Isaac Lab's parser fills the
+    joints a dict does not match with 0 (2.3's and 3.0's alike), and that is what it writes.
+    """
     if value is None:
         return None
     if isinstance(value, Mapping):
         for pattern, item in value.items():
-            if re.fullmatch(str(pattern), joint):
-                return float(item)
-        return None
+            try:
+                if re.fullmatch(str(pattern), joint):
+                    return float(item)
+            except re.error as exc:
+                raise InputError(f"{field}: key {pattern!r} is not a regex ({exc})") from None
+        return 0.0
     return float(value)
 
 
-def check_implicit_actuator(actuator: Any, envelopes: Mapping[str, PerformanceEnvelope]) -> list[str]:
-    """The settings of an ``ImplicitActuatorCfg`` that would change authored envelopes, one line each.
+def _explicit(actuator: Any) -> bool:
+    """Whether the cfg builds an explicit actuator (its class is not an ``ImplicitActuator``)."""
+    class_type = getattr(actuator, "class_type", None)
+    if isinstance(class_type, type):  # 2.3 sets ImplicitActuator.is_implicit_model only once one is built
+        return not any(base.__name__ == "ImplicitActuator" for base in class_type.__mro__)
+    try:  # Isaac Lab 3.0 names classes by lazy strings that resolve on attribute access
+        implicit = getattr(class_type, "is_implicit_model", None)
+    except (ImportError, AttributeError, ValueError):
+        implicit = None
+    return implicit is False
 
-    Isaac Lab writes ``effort_limit_sim`` (or, for implicit actuators, ``effort_limit``) into
-    PhysX's drive max force, i.e. the envelope's maxEffort: any value other than the authored
-    max_effort replaces it. A ``velocity_limit_sim`` below max_actuator_velocity caps the joint's
-    speed below the envelope's (PhysX's maxJointVelocity), which the envelope does not model.
+
+def check_implicit_actuator(actuator: Any, envelopes: Mapping[str, PerformanceEnvelope]) -> list[str]:
+    """The settings of an actuator cfg that would change authored envelopes, one line each.
+
+    Isaac Lab writes an implicit actuator's effort limit (3.0 ``joint_effort_limit``, 2.3
+    ``effort_limit_sim``, and the deprecated ``effort_limit``) into PhysX's drive max force, i.e.
+    the envelope's maxEffort: any value other than the authored max_effort replaces it, and a dict
+    that leaves a joint out gives it 0 (the drive is off). A joint speed limit (3.0
+    ``joint_velocity_limit``, 2.3 ``velocity_limit_sim``) below max_actuator_velocity caps the
+    joint below the envelope's speed (PhysX's maxJointVelocity), which the envelope does not model.
+    An explicit cfg (an ``IdealPDActuatorCfg``, ``DCMotorCfg``, ``ActuatorNetLSTMCfg``, ...) is one
+    line: Isaac Lab runs its own model and sets PhysX's drive gains to 0, so the authored envelope
+    has no PhysX drive to clamp.
 
     Args:
-        actuator: An Isaac Lab ``ImplicitActuatorCfg`` (or any cfg with its fields).
+        actuator: An Isaac Lab actuator cfg of 2.3 or 3.0 (or any object with its fields).
         envelopes: The authored envelope per joint name (e.g. :attr:`ImplicitEnvelopeSetup.envelopes`).
 
     Returns:
         Problems, empty when the cfg leaves every envelope as authored.
+
+    Raises:
+        InputError: a ``joint_names_expr`` that is a string or holds a pattern that is not a regex.
     """
+    from drive_envelope._src.adapters.isaaclab.compat import ISAACLAB_3_0
+
+    patterns = _patterns(actuator)
+    joints = [j for j in envelopes if not patterns or any(p.fullmatch(j) for p in patterns)]
+    if joints and _explicit(actuator):
+        return [
+            f"{type(actuator).__name__} is an explicit actuator: Isaac Lab computes its effort itself "
+            f"and sets PhysX's drive gains to 0 on {joints}, so the envelope authored for PhysX's drive "
+            "clamps no drive; use an ImplicitActuatorCfg for these joints (author_implicit_envelopes "
+            "returns one) or PerformanceEnvelopeActuatorCfg for the envelope in an explicit actuator"
+        ]
     problems = []
-    patterns = list(getattr(actuator, "joint_names_expr", None) or [])
-    for joint, envelope in envelopes.items():
-        if patterns and not any(re.fullmatch(p, joint) for p in patterns):
-            continue
-        for field in ("effort_limit_sim", "effort_limit"):
-            value = _values_for(getattr(actuator, field, None), joint)
-            if value is not None and not math.isclose(value, envelope.max_effort, rel_tol=1e-6):
-                problems.append(
-                    f"{field} = {value:g} for joint {joint!r} replaces the envelope's max_effort "
-                    f"{envelope.max_effort:g} in PhysX (leave it None or equal)"
-                )
-        speed = _values_for(getattr(actuator, "velocity_limit_sim", None), joint)
-        if speed is not None and speed < envelope.max_actuator_velocity:
-            problems.append(
-                f"velocity_limit_sim = {speed:g} for joint {joint!r} caps the joint below the envelope's "
-                f"max_actuator_velocity {envelope.max_actuator_velocity:g} rad/s (PhysX's maxJointVelocity)"
+    # 3.0's field names are a superset of 2.3's: a cfg of either has the ones it reads
+    for joint in joints:
+        envelope = envelopes[joint]
+        for field in ISAACLAB_3_0.joint_effort_limits:
+            given = getattr(actuator, field, None)
+            value = _value_for(given, joint, field)
+            if value is None or math.isclose(value, envelope.max_effort, rel_tol=1e-6):
+                continue
+            unnamed = isinstance(given, Mapping) and value == 0.0
+            why = (
+                f"{field} names no value for joint {joint!r}: Isaac Lab writes 0 as its max force, "
+                f"which turns the drive off (the envelope's max_effort is {envelope.max_effort:g}; "
+                "name every joint, or leave it None)"
+                if unnamed
+                else f"{field} = {value:g} for joint {joint!r} replaces the envelope's max_effort "
+                f"{envelope.max_effort:g} in PhysX (leave it None or equal)"
             )
+            problems.append(why)
+        for field in ISAACLAB_3_0.joint_velocity_limits:
+            speed = _value_for(getattr(actuator, field, None), joint, field)
+            if speed is not None and speed < envelope.max_actuator_velocity:
+                problems.append(
+                    f"{field} = {speed:g} for joint {joint!r} caps the joint below the envelope's "
+                    f"max_actuator_velocity {envelope.max_actuator_velocity:g} rad/s "
+                    "(PhysX's maxJointVelocity)"
+                )
     return problems
