@@ -90,6 +90,7 @@ class EnvelopeDrives:
         }
         self._untracked = wp.zeros((1, 2), dtype=wp.int32, device=device)
         self._no_delay = wp.zeros((1, 1), dtype=wp.float32, device=device)
+        self._no_bias = wp.zeros((1, 1), dtype=wp.float32, device=device)
 
     @property
     def count(self) -> int:
@@ -122,6 +123,18 @@ class EnvelopeDrives:
         work = wp.empty((nworld, self._nwork), dtype=wp.float64, device=self._device)
         iwork = wp.empty((nworld, self._niwork), dtype=wp.int32, device=self._device)
         return work.transpose(), iwork.transpose()
+
+    def solver_codes(self) -> tuple[int, int, int]:
+        """(solver code, position_iterations, velocity_iterations) of ``mj_model``'s solver setting.
+
+        Read from the host model at every call, as the C plugin reads it at every step
+        (``drive_envelope.mujoco.set_solver`` on :attr:`mj_model` changes it); a CUDA graph keeps
+        the values it was captured with.
+        """
+        from drive_envelope._src.adapters.mujoco.solver import SOLVERS, get_solver
+
+        setting = get_solver(self.mj_model)
+        return SOLVERS.index(setting.solver), setting.position_iterations, setting.velocity_iterations
 
     def _field(self, m: Any, name: str) -> Any:
         """Model field ``name``, or its stand-in where this MJWarp version has no such field."""
@@ -166,6 +179,29 @@ class EnvelopeDrives:
             device=device,
         )
         mujoco_warp.xfrc_accumulate(m, d, force)
+        codes = self.solver_codes()
+        bias = self._no_bias
+        if codes[0] == 2:  # TGS applies the velocity-dependent bias once, the rest per substep
+            from mujoco_warp._src.support import apply_ft  # J'*wrench per body, as xfrc_accumulate
+
+            weight = wp.empty((nworld, m.nbody), dtype=wp.spatial_vector, device=device)
+            wp.launch(
+                kernels._weight_kernel,
+                dim=(nworld, m.nbody),
+                inputs=[m.body_mass, m.opt.gravity, not flags & DisableBit.GRAVITY],
+                outputs=[weight],
+                device=device,
+            )
+            gravity_force = wp.empty((nworld, m.nv), dtype=wp.float32, device=device)
+            apply_ft(m, d, weight, gravity_force, False)
+            bias = wp.empty((nworld, m.nv), dtype=wp.float32, device=device)
+            wp.launch(
+                kernels._bias_force_kernel,
+                dim=(nworld, m.nv),
+                inputs=[d.qfrc_bias, gravity_force],
+                outputs=[bias],
+                device=device,
+            )
         work, iwork = self._scratch(nworld)
         tracked = self.stats is not None and self.stats.shape[0] == nworld
         wp.launch(
@@ -200,6 +236,7 @@ class EnvelopeDrives:
                 not flags & DisableBit.CLAMPCTRL,
                 implicit_damping(flags, int(m.opt.integrator)),
                 tracked,
+                *codes,
                 self._layout,
                 d.qpos,
                 d.qvel,
@@ -207,6 +244,7 @@ class EnvelopeDrives:
                 d.M,
                 delayed,
                 force,
+                bias,
                 work,
                 iwork,
                 self.stats if tracked else self._untracked,
@@ -223,6 +261,7 @@ def _layout(layout_type: Any, n: int, nv: int, nc: int) -> tuple[Any, int, int]:
     sizes = [("mh", nc), ("dinv", nv), ("y", nv), ("z", n * nv), ("a", n * n), ("q", n * n)]
     sizes += [(name, n) for name in ("vfree", "c", "alpha", "x", "v", "rest", "slope", "b", "gx", "effort")]
     sizes += [("prm", 6 * n), ("err", n), ("tvel", n), ("ff", n)]
+    sizes += [("desc", 5 * n), ("moved", n), ("qvel", n), ("bias", n)]  # pgs/tgs
     offset = 0
     for name, size in sizes:
         setattr(lay, name, offset)

@@ -15,11 +15,14 @@ every other actuator's force (``J'*xfrc_applied`` is added after it by MJWarp's 
    velocity ``vfree = qvel + h*(M + h*D')^-1 f`` over the driven DOFs;
 4. gives each drive the unclamped law ``w = c - alpha*v1`` (PhysX's implicit PD drive) and runs the
    coupled solve (:func:`.solve.solve_drives`);
+   or, with the model's solver setting ``"pgs"``/``"tgs"``, PhysX's articulation iteration
+   (:func:`.articulation.articulation`);
 5. writes each drive's effort to ``actuator_force`` of its effort actuator (its other actuators 0).
 """
 
 import warp as wp
 
+from drive_envelope._src.adapters.mjwarp.articulation import articulation
 from drive_envelope._src.adapters.mjwarp.solve import Layout, solve_drives
 
 wp.set_module_options({"fuse_fp": False})
@@ -65,6 +68,30 @@ def _smooth_force_kernel(
             adr = moment_rowadr[w, a]
             for j in range(moment_rownnz[w, a]):
                 force[w, moment_colind[w, adr + j]] += actuator_moment[w, adr + j] * fa
+
+
+@wp.kernel(enable_backward=False)
+def _weight_kernel(
+    body_mass: wp.array2d[float],
+    opt_gravity: wp.array[wp.vec3],
+    gravity: bool,
+    weight: wp.array2d[wp.spatial_vector],
+):
+    """weight[w, b] = (m_b*g, 0): each body's weight as MJWarp's body wrenches (force, torque)."""
+    w, b = wp.tid()
+    g = wp.vec3(0.0)
+    if gravity:
+        g = opt_gravity[w % opt_gravity.shape[0]] * body_mass[w % body_mass.shape[0], b]
+    weight[w, b] = wp.spatial_vector(g, wp.vec3(0.0))
+
+
+@wp.kernel(enable_backward=False)
+def _bias_force_kernel(
+    qfrc_bias: wp.array2d[float], gravity_force: wp.array2d[float], bias: wp.array2d[float]
+):
+    """bias[w] = -qfrc_bias - J'*m*g: the smooth force's velocity-dependent part (TGS: applied once)."""
+    w, i = wp.tid()
+    bias[w, i] = -qfrc_bias[w, i] - gravity_force[w, i]
 
 
 @wp.func
@@ -345,6 +372,9 @@ def _drive_kernel(
     clampctrl: bool,
     implicit_damping: bool,
     track: bool,
+    solver_kind: int,
+    position_iterations: int,
+    velocity_iterations: int,
     lay: Layout,
     qpos: wp.array2d[float],
     qvel: wp.array2d[float],
@@ -352,6 +382,7 @@ def _drive_kernel(
     M: wp.array2d[float],
     delayed: wp.array2d[float],
     force: wp.array2d[float],
+    bias: wp.array2d[float],
     work: wp.array2d[wp.float64],
     iwork: wp.array2d[wp.int32],
     stats: wp.array2d[wp.int32],
@@ -427,8 +458,23 @@ def _drive_kernel(
                 entry = _dot_dinv(work, lay, w, lay.z + r * lay.nv, lay.z + s * lay.nv, drive_dof[r])
                 work[lay.a + r * n + s, w] = entry
                 work[lay.a + s * n + r, w] = entry
-        _prepare(work, iwork, lay, drive_accel, w, h)
-        iterations = solve_drives(work, iwork, lay, drive_accel, w, h)
+        if solver_kind == 0:
+            _prepare(work, iwork, lay, drive_accel, w, h)
+            iterations = solve_drives(work, iwork, lay, drive_accel, w, h)
+        else:  # PhysX's PGS or TGS iteration (drive_envelope_solver numeric)
+            for r in range(n):
+                work[lay.qvel + r, w] = wp.float64(qvel[w, drive_dof[r]])
+                work[lay.bias + r, w] = wp.float64(0.0)
+            if solver_kind == 2:  # TGS: the bias's share of vfree, applied before the substeps
+                for i in range(lay.nv):
+                    work[lay.y + i, w] = wp.float64(bias[w, i])
+                _back_substitute(work, lay, M_rownnz, M_rowadr, M_colind, w, lay.y, lay.nv - 1)
+                for r in range(n):
+                    z = lay.z + r * lay.nv
+                    work[lay.bias + r, w] = h * _dot_dinv(work, lay, w, z, lay.y, drive_dof[r])
+            iterations = articulation(
+                work, iwork, lay, drive_accel, w, h, solver_kind, position_iterations, velocity_iterations
+            )
     for k in range(n):
         for s in range(3):
             a = drive_outputs[3 * k + s]
