@@ -18,6 +18,16 @@ Warp building block ``clamp_effort_func`` (``drive_envelope._src.kernels.warp_fu
 ``modify_forces`` and float64 in ``evaluate_clamp``: one formula, one NaN rule. Newton and Warp are
 imported in :func:`build`, so this module can be imported without them.
 
+PhysX's PGS/TGS iteration (``drive_envelope.mujoco.set_solver``, issue 21) does not fit this API:
+a clamping stage is one function of the velocity Newton's solve predicts for the whole step. It
+sees neither the DOF's response ``(M^-1)_ii``, nor the other drives' impulses one by one (Newton
+solves the actuators of a step together, not in a root-to-leaf sweep), nor a TGS substep's loads
+and displacement, nor a velocity pass that re-clamps the step's total. So Newton keeps the
+whole-step implicit solve, which is PhysX's PGS on an isolated DOF; the nearest Newton gets to TGS
+is to step the solver ``position_iterations`` times with ``dt/position_iterations`` (per-substep
+loads, clamps and positions; no whole-step velocity re-clamp, so it is TGS with 0 velocity
+iterations), which is the caller's choice of time step, not something a clamping stage can do.
+
 Where it differs from Newton's ``ClampingDCMotor`` (``sat``, ``v_lim``, ``max_e``): with
 ``max_actuator_velocity = v_lim``, ``speed_effort_gradient = v_lim / sat``, ``R = 0`` the two agree
 whenever effort and velocity have the same sign (driving quadrants) and at rest. When braking the
