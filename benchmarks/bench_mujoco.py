@@ -23,7 +23,10 @@ still depends on the forces). A third line drops the constraints altogether: the
 kinds there is their actuation cost alone. A fourth line lets each kind run its own motion (its own
 contacts).
 
-    .venv/bin/python benchmarks/bench_mujoco.py [--blocks 31] [--states 1500]
+``--solver pgs|tgs`` (with ``--iterations P V``) runs the plugin's drives as PhysX's articulation
+iterates them (``drive_envelope.mujoco.set_solver``) instead of the exact coupled solve.
+
+    .venv/bin/python benchmarks/bench_mujoco.py [--blocks 31] [--states 1500] [--solver tgs --iterations 4 1]
 """
 
 from __future__ import annotations
@@ -75,11 +78,13 @@ def _base_spec() -> tuple[Any, str]:
     return spec, "example quadruped (../shared/data absent)"
 
 
-def build(kind: str) -> tuple[Any, list[str], str]:
+def build(
+    kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)
+) -> tuple[Any, list[str], str]:
     """The model with its motors replaced by ``kind``; returns (model, joint names, robot label)."""
     import mujoco
 
-    from drive_envelope.mujoco import add_drive
+    from drive_envelope.mujoco import add_drive, set_solver
 
     spec, label = _base_spec()
     joints = [j.name for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
@@ -103,6 +108,8 @@ def build(kind: str) -> tuple[Any, list[str], str]:
                 ctrlspec=1,
             )
         actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    if kind == "plugin" and solver != "exact":
+        set_solver(spec, solver, position_iterations=iterations[0], velocity_iterations=iterations[1])
     return spec.compile(), joints, label
 
 
@@ -186,6 +193,12 @@ def main() -> int:
     parser = argparse.ArgumentParser(description="mj_step cost: plugin vs native position and dcmotor")
     parser.add_argument("--blocks", type=int, default=31, help="timed blocks per kind (default 31)")
     parser.add_argument("--states", type=int, default=1500, help="recorded states (steps) per block")
+    parser.add_argument(
+        "--solver", choices=("exact", "pgs", "tgs"), default="exact", help="the plugin's solver"
+    )
+    parser.add_argument(
+        "--iterations", type=int, nargs=2, default=(4, 1), metavar=("P", "V"), help="pgs/tgs iterations"
+    )
     args = parser.parse_args()
 
     import mujoco
@@ -194,7 +207,8 @@ def main() -> int:
     from drive_envelope.mujoco import load_plugin
 
     load_plugin()
-    built = {kind: build(kind) for kind in KINDS}
+    built = {kind: build(kind, args.solver, tuple(args.iterations)) for kind in KINDS}
+    solver = args.solver if args.solver == "exact" else "{} {}/{}".format(args.solver, *args.iterations)
     joints, label = built["plugin"][1], built["plugin"][2]
     times = np.arange(args.states) * built["plugin"][0].opt.timestep
     control = targets(times)
@@ -214,7 +228,8 @@ def main() -> int:
     print(
         f"mujoco {mujoco.__version__}, {label}: nv = {model.nv}, 12 actuated hinges, "
         f"{mujoco.mjtIntegrator(model.opt.integrator).name}, dt = {model.opt.timestep * 1e3:g} ms, "
-        f"{args.blocks} blocks x {args.states} steps; median thread CPU time per mj_step:"
+        f"{args.blocks} blocks x {args.states} steps, plugin solver {solver}; "
+        "median thread CPU time per mj_step:"
     )
     # same states with the constraint solver pinned to a fixed amount of work: each kind's forces
     # change how hard MuJoCo's solver works on the same contacts; pinned, only the actuators differ
