@@ -144,7 +144,7 @@ def test_explicit_time_column_must_exist(tmp_path: Path) -> None:
 
 def test_missing_file_is_an_input_error(tmp_path: Path) -> None:
     """Report a missing log file in one line."""
-    with pytest.raises(InputError, match="no such file"):
+    with pytest.raises(InputError, match="no such log file"):
         read_log(tmp_path / "absent.csv")
 
 

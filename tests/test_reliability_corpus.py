@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import gzip
 import importlib.util
+import os
+import stat
 import subprocess
 import sys
 import warnings
@@ -61,11 +63,37 @@ def _long_field_trajectory(path: Path) -> None:
     path.write_text("time,position,velocity,effort\n0,0,0," + "1" * 200_000 + "\n", encoding="utf-8")
 
 
+LONG_NAME = "n" * 300
+"""A file name over the 255 bytes a name may have (``{long/SUFFIX}`` is a path ending in it)."""
+
+
+def _fifo(path: Path) -> None:
+    os.mkfifo(path)  # nobody ever writes: a reader that opened it would block for ever
+
+
+def _endless(path: Path) -> None:
+    path.symlink_to("/dev/zero")  # x.json that never ends: read whole, it would fill the memory
+
+
+def _not_utf8_usda(path: Path) -> None:
+    text = (REPO / "examples" / "usd" / "robot.usda").read_bytes()
+    start = text.index(b"def ")
+    path.write_bytes(text[:start] + b'def Xform "caf\xe9" {}\n' + text[start:])  # Latin-1, not UTF-8
+
+
+def _long_value_map(path: Path) -> None:
+    path.write_text(f'[joints]\nhip = "{LONG_NAME}.toml"\n', encoding="utf-8")
+
+
 GENERATED: dict[str, Callable[[Path], None]] = {
     "truncated.csv.gz": _truncated_gzip,
     "long_header.csv": _long_header,
     "many_joints.csv": _many_joints,
     "long_field_trajectory.csv": _long_field_trajectory,
+    "not_utf8.usda": _not_utf8_usda,
+    "long_value_map.toml": _long_value_map,
+    **{f"fifo.{suffix}": _fifo for suffix in ("toml", "json", "csv", "usda", "xml")},
+    **{f"endless.{suffix}": _endless for suffix in ("toml", "json", "csv", "usda", "xml")},
 }
 """Inputs built at test time (``generated/NAME``): too large or binary to keep in the repository."""
 
@@ -102,14 +130,19 @@ class _Paths:
             if not SHARED.is_dir():
                 pytest.skip(f"needs ../shared/data (real inputs; absent in this checkout): {rest}")
             return SHARED / rest
+        if kind == "long":
+            return self.out / f"{LONG_NAME}{rest}"
         if kind == "generated":
             target = self.generated / rest
-            if not target.exists():
+            if not os.path.lexists(target):
                 GENERATED[rest](target)
             return target
         return CORPUS / name
 
     def argument(self, text: str, case: dict[str, Any]) -> str:
+        if "={" in text and text.endswith("}"):  # KEY={PATH}: a --set value
+            key, _, rest = text.partition("={")
+            return f"{key}={self.argument('{' + rest, case)}"
         if text.startswith("{") and "}/" in text:  # {PATH}/rest: a name below a file (not a folder)
             head, _, rest = text.partition("}/")
             return f"{self.argument(head + '}', case)}/{rest}"
@@ -123,14 +156,28 @@ class _Paths:
         return str(self.path(name))
 
 
-def _snapshot(*folders: Path) -> set[tuple[str, int, int]]:
-    """Every file under ``folders`` with its size and modification time: a write changes the set."""
+def _placeholder(argument: str) -> str:
+    """The placeholder name in ``{NAME}``, ``{NAME}/rest`` or ``KEY={NAME}``, else ``''``."""
+    start = argument.find("{")
+    if start != 0 and not (start > 0 and argument[start - 1] == "="):
+        return ""
+    return argument[start + 1 :].partition("}")[0]
+
+
+def _snapshot(*folders: Path) -> set[tuple[str, int, int, int]]:
+    """Every entry under ``folders`` with its type, and a file's size and time: a write changes the set.
+
+    The type is the entry's own (``lstat``): a FIFO or a link to ``/dev/zero`` replaced by a regular
+    file changes it.
+    """
     found = set()
     for folder in folders:
         for path in folder.rglob("*"):
-            if path.is_file():
-                stat = path.stat()
-                found.add((str(path), stat.st_size, stat.st_mtime_ns))
+            info = path.lstat()
+            if stat.S_ISREG(info.st_mode):
+                found.add((str(path), stat.S_IFMT(info.st_mode), info.st_size, info.st_mtime_ns))
+            elif not stat.S_ISDIR(info.st_mode):
+                found.add((str(path), stat.S_IFMT(info.st_mode), 0, 0))
     return found
 
 
@@ -182,19 +229,19 @@ def test_corpus_is_well_formed() -> None:
         assert case["error"] and case["run"], case["id"]
         uses_input = any("{input}" in argv for argv in case["run"])
         assert uses_input == ("input" in case), f"{case['id']}: input and {{input}} go together"
-        placeholders = [a[1:].partition("}")[0] for argv in case["run"] for a in argv if a[:1] == "{"]
+        placeholders = [_placeholder(a) for argv in case["run"] for a in argv if _placeholder(a)]
         for name in [case.get("input", ""), *placeholders]:
             kind = name.partition("/")[0]
             if kind == "generated":
                 assert name.partition("/")[2] in GENERATED, f"{case['id']}: no generator for {name}"
-            elif name and kind not in ("out", "repo", "shared", "tmp", "input"):
+            elif name and kind not in ("out", "repo", "shared", "tmp", "input", "long"):
                 assert (CORPUS / name).is_file(), f"{case['id']}: no corpus file {name}"
 
 
 def test_every_corpus_file_is_used() -> None:
     """Run every file of tests/corpus through at least one case (no forgotten input)."""
     used = {case.get("input", "") for case in CASES}
-    used |= {a[1:].partition("}")[0] for case in CASES for argv in case["run"] for a in argv if a[:1] == "{"}
+    used |= {_placeholder(a) for case in CASES for argv in case["run"] for a in argv}
     files = {str(p.relative_to(CORPUS)) for p in CORPUS.rglob("*") if p.is_file() and p.name != "cases.toml"}
     assert files - used == set()
 

@@ -116,10 +116,14 @@ def test_bundled_scenarios_run(path: Path, tmp_path: Path) -> None:
 
 
 def test_unwritable_output_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """An output in a missing folder exits 2 with one line instead of a traceback."""
-    out = tmp_path / "missing" / "out.csv"
+    """An output below a file (not a folder) exits 2 with one line; a missing folder is created."""
+    (tmp_path / "plain").write_text("x", encoding="utf-8")
+    out = tmp_path / "plain" / "out.csv"
     assert main(["simulate", str(SATURATION), "-o", str(out), "--set", "simulation.duration=0.05"]) == 2
     assert "cannot write" in capsys.readouterr().err
+    made = tmp_path / "missing" / "out.csv"
+    assert main(["simulate", str(SATURATION), "-o", str(made), "--set", "simulation.duration=0.05"]) == 0
+    assert made.read_text(encoding="utf-8").startswith("time,")
 
 
 def test_step_limit_is_checked_before_the_run(monkeypatch: pytest.MonkeyPatch) -> None:

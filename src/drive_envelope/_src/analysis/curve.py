@@ -29,6 +29,7 @@ from drive_envelope._src.analysis.log_units import column_scale, find_columns, s
 from drive_envelope._src.analysis.logs import LogColumns
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import input_file
 
 __all__ = ["EFFORT_ALIASES", "VELOCITY_ALIASES", "read_curve"]
 
@@ -86,6 +87,7 @@ def read_curve(
     columns = columns or LogColumns()
     file = Path(path)
     label = str(file)
+    input_file(file, label)  # a FIFO, a device (/dev/zero) or a file over the text cap: refused unopened
     try:
         with open(file, encoding="utf-8-sig", newline="") as handle:
             rows = [

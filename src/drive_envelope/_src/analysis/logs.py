@@ -32,6 +32,7 @@ from drive_envelope._src.analysis.log_bag import bag_table, is_bag, read_bag
 from drive_envelope._src.analysis.log_csv import iter_csv_arrow, iter_csv_python
 from drive_envelope._src.analysis.log_model import LogChunk, LogColumns
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import input_file
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",
@@ -91,11 +92,7 @@ def iter_log(
     if isinstance(source, (str, os.PathLike)) and is_bag(source):  # a ROS 2 bag: one long table
         chunks = iter_table(bag_table(read_bag(source, columns.bag)), columns, chunk_rows, label)
     elif isinstance(source, (str, os.PathLike)):
-        path = Path(source)
-        if path.is_dir():
-            raise InputError(f"{label}: is a folder; expected a log file")
-        if not path.is_file():
-            raise InputError(f"{label}: no such file")
+        path = input_file(source, label, max_bytes=None, what="log file")  # read in chunks: no size cap
         if path.suffix.lower() in _PARQUET_SUFFIXES:
             chunks = iter_parquet(path, columns, chunk_rows, label)
         elif path.suffix.lower() == ".json":  # simulate's JSON trajectory (SI, standard column names)

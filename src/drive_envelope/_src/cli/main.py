@@ -10,6 +10,7 @@ argument errors load neither NumPy nor an engine.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 from collections.abc import Sequence
@@ -128,13 +129,31 @@ def _main(argv: Sequence[str] | None) -> int:
         return 130
     except BrokenPipeError:  # a pipe other than standard output (which _StandardOutput handles)
         return 141  # what a shell reports for a writer ended by SIGPIPE
+    except OSError as exc:
+        if exc.errno != errno.ENAMETOOLONG:
+            return _internal_error(exc)
+        # a path the readers did not check first (Path.is_file() raises on it): still the user's
+        from drive_envelope._src.io.paths import check_path_name
+
+        try:
+            check_path_name(os.fsdecode(exc.filename or ""))
+        except InputError as named:
+            print(f"{PROG}: error: {named}", file=sys.stderr)
+        else:
+            print(f"{PROG}: error: a file name is too long (at most 255 bytes per name)", file=sys.stderr)
+        return 2
     except Exception as exc:  # last resort: a bug, never a user mistake (those are InputError)
-        if os.environ.get("DRIVE_ENVELOPE_TRACEBACK"):
-            raise
-        detail = " ".join(str(exc).split())[:300]
-        print(
-            f"{PROG}: internal error: {type(exc).__name__}: {detail} (a bug: please report it at "
-            f"{_ISSUES} with the command; DRIVE_ENVELOPE_TRACEBACK=1 shows the traceback)",
-            file=sys.stderr,
-        )
-        return 1
+        return _internal_error(exc)
+
+
+def _internal_error(exc: Exception) -> int:
+    """Report a bug in one line (exit 1), or re-raise it with ``DRIVE_ENVELOPE_TRACEBACK=1``."""
+    if os.environ.get("DRIVE_ENVELOPE_TRACEBACK"):
+        raise exc
+    detail = " ".join(str(exc).split())[:300]
+    print(
+        f"{PROG}: internal error: {type(exc).__name__}: {detail} (a bug: please report it at "
+        f"{_ISSUES} with the command; DRIVE_ENVELOPE_TRACEBACK=1 shows the traceback)",
+        file=sys.stderr,
+    )
+    return 1

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import check_path_name
 
 __all__ = ["EnvelopeLike", "resolve_envelope"]
 
@@ -66,6 +67,7 @@ def _resolve(spec: object, base: str | os.PathLike[str] | None, duty: str) -> Pe
         )
     if duty not in ("peak", "continuous"):
         raise InputError(f"duty: expected 'peak' or 'continuous', got {duty!r}")
+    check_path_name(os.fspath(spec))
     path = _find_file(os.fspath(spec), base)
     if path is not None:
         data = read_mapping(path)
@@ -84,4 +86,5 @@ def _find_file(spec: str, base: str | os.PathLike[str] | None) -> Path | None:
     candidates = [Path(spec)]
     if base is not None and not Path(spec).is_absolute():
         candidates.insert(0, Path(base) / spec)
-    return next((path for path in candidates if path.is_file()), None)
+    # exists(), not is_file(): a FIFO or a device is found here and refused by type when it is read
+    return next((path for path in candidates if os.path.exists(path)), None)

@@ -42,6 +42,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import input_file
 
 __all__ = ["COLUMNS", "BenchLog", "read_bench_log"]
 
@@ -118,14 +119,9 @@ def read_bench_log(
     label = str(file)
     if is_bag(file):
         columns = _read_bag(file, label, bag or BagOptions(), joint)
-    elif file.is_dir():
-        raise InputError(f"{label}: is a folder; expected a bench log file")
-    elif not file.is_file():
-        raise InputError(f"{label}: no such file")
-    elif file.suffix.lower() in _PARQUET:
-        columns = _read_parquet(file, label)
     else:
-        columns = _read_csv(file, label)
+        input_file(file, label, max_bytes=None, what="bench log file")  # a FIFO would block: refused
+        columns = _read_parquet(file, label) if file.suffix.lower() in _PARQUET else _read_csv(file, label)
     sidecar = _sidecar(file)
     rows = columns["time"].shape[0]
     if rows < 3:

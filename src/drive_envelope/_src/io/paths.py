@@ -117,11 +117,11 @@ def input_file(
     except OSError as exc:
         raise InputError(f"{shown}: cannot read: {exc.strerror or exc}") from None
     if stat.S_ISDIR(mode.st_mode):
-        raise InputError(f"{shown}: is a folder; expected a {what}")
+        raise InputError(f"{shown}: is a folder; expected {_article(what)} {what}")
     kind = node_kind(mode.st_mode)
     if kind is not None:
         raise InputError(
-            f"{shown}: is {kind}, not a regular file; expected a {what} (inputs are read from "
+            f"{shown}: is {kind}, not a regular file; expected {_article(what)} {what} (inputs are read from "
             "regular files only: save the stream to a file first)"
         )
     if max_bytes is not None and mode.st_size > max_bytes:
@@ -130,6 +130,11 @@ def input_file(
             f"most {describe_size(max_bytes)}"
         )
     return file
+
+
+def _article(word: str) -> str:
+    """``a`` or ``an`` before ``word`` (``an MJCF file``, ``a USD file``)."""
+    return "an" if word[:1].lower() in "aeiou" or word.startswith("MJCF") else "a"
 
 
 def read_input_bytes(

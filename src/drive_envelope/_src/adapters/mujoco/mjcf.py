@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from drive_envelope._src.adapters.mujoco.existing import joint_actuators
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.paths import input_file
 
 if TYPE_CHECKING:
     import mujoco
@@ -90,8 +91,7 @@ def load_spec(path: str | os.PathLike[str]) -> mujoco.MjSpec:
     import mujoco
 
     name = os.fspath(path)
-    if not Path(name).is_file():
-        raise InputError(f"{name}: no such MJCF file")
+    input_file(name, what="MJCF file")  # a FIFO or /dev/zero would block or fill the memory
     try:
         return mujoco.MjSpec.from_file(name)
     except ValueError as exc:
@@ -136,8 +136,7 @@ def read_model(path: str | os.PathLike[str]) -> mujoco.MjModel:
     import mujoco
 
     name = os.fspath(path)
-    if not Path(name).is_file():
-        raise InputError(f"{name}: no such MJCF file")
+    input_file(name, what="MJCF file")  # a FIFO or /dev/zero would block or fill the memory
     _load_plugin_if_used(Path(name).read_text(encoding="utf-8", errors="replace"))
     try:
         with mujoco_warnings():

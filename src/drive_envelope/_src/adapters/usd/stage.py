@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.adapters.usd.scale import StageUnits
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.files import read_text
+from drive_envelope._src.io.paths import input_file
 
 if TYPE_CHECKING:
     from pxr import Usd
@@ -88,8 +90,16 @@ def clean_usd_message(text: str) -> str:
 
 def _error_text(exc: BaseException) -> str:
     """The commentary of every ``Tf.Error`` a ``Tf.ErrorException`` carries, cleaned."""
-    parts = [str(getattr(error, "commentary", error)).strip() for error in exc.args] or [str(exc)]
+    parts = [_commentary(error) for error in exc.args] or [_commentary(exc)]
     return clean_usd_message("; ".join(dict.fromkeys(parts)))  # USD often repeats itself
+
+
+def _commentary(error: object) -> str:
+    """One ``Tf.Error``'s text; USD quotes the file's bytes in it, which need not be UTF-8."""
+    try:
+        return str(getattr(error, "commentary", error)).strip()
+    except UnicodeDecodeError:
+        return "USD's message quotes bytes that are not UTF-8 text (the file is damaged or not USD)"
 
 
 @contextlib.contextmanager
@@ -121,10 +131,10 @@ def usd_errors(where: str) -> Iterator[None]:
 
 
 def _check_readable(file: Path) -> None:
-    if not file.exists():
-        raise InputError(f"{file}: no such file")
-    if file.is_dir():
-        raise InputError(f"{file}: is a folder; expected a USD file (.usd, .usda, .usdc or .usdz)")
+    if file.suffix.lower() != ".usda":  # crate files (.usd, .usdc) and packages: USD maps them
+        input_file(file, max_bytes=None)
+    else:  # USD's own message on a byte that is not UTF-8 cannot be decoded: say where it is here
+        read_text(file)
     if file.suffix.lower() not in _READABLE:
         raise InputError(f"{file}: expected a USD file (.usd, .usda, .usdc or .usdz), got {file.suffix!r}")
 

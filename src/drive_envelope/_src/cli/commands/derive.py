@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from typing import Any
 
 from drive_envelope._src.cli.common import add_format_argument, add_output_argument
@@ -58,7 +59,6 @@ def register(subparsers: Any) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     import json
-    from pathlib import Path
 
     from drive_envelope._src.cli.common import checked_output, status, warn
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
@@ -70,7 +70,7 @@ def _run(args: argparse.Namespace) -> int:
     output = checked_output(args.output)
     file_format = _format_from_suffix(output) if output is not None else None
     overrides = _overrides(args.set)
-    if Path(args.spec).is_file():
+    if os.path.exists(args.spec):  # not is_file(): a FIFO or a device is refused by type when read
         sheet = load_datasheet(args.spec, overrides=overrides)
     else:
         _check_not_a_path(args.spec)
@@ -127,6 +127,9 @@ def _check_not_a_path(spec: str) -> None:
     from drive_envelope._src.errors import InputError
 
     if Path(spec).suffix.lower() in (".toml", ".json", ".yaml", ".yml") or "/" in spec:
+        from drive_envelope._src.io.paths import check_path_name
+
+        check_path_name(spec)
         raise InputError(f"{spec}: no such file")
 
 
