@@ -10,6 +10,9 @@ from __future__ import annotations
 import errno
 import importlib.util
 import os
+import stat
+import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -124,3 +127,83 @@ def test_parquet_without_pyarrow_is_refused_before_the_run(
     assert main(["simulate", str(CORPUS / "scenario.toml"), "-o", str(out)]) == 2
     assert "Parquet needs pyarrow" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+REPO = Path(__file__).resolve().parents[1]
+MENAGERIE = REPO.parent / "shared" / "data" / "menagerie"
+
+
+def _device_commands(out: Path) -> dict[str, list[str]]:
+    """One -o run per command that writes, onto ``out`` (a FIFO or a device node)."""
+    envelope = str(CORPUS / "envelope.toml")
+    return {
+        "simulate": ["simulate", str(CORPUS / "scenario.toml"), "-o", str(out)],
+        "derive": ["derive", "tmotor-ak80-6", "-o", str(out)],
+        "fit": ["fit", str(CORPUS / "sweep.csv"), "--bootstrap", "0", "-o", str(out)],
+        "usd apply": [
+            "usd", "apply", str(REPO / "examples" / "usd" / "robot.usda"), "--joint",
+            "/Robot/joints/shoulder", "--envelope", envelope, "-o", str(out),
+        ],
+        "mujoco apply": [
+            "mujoco", "apply", str(MENAGERIE / "go2.xml"), "--joint", "FL_hip_joint", "--envelope",
+            envelope, "--stiffness", "20", "--damping", "0.5", "-o", str(out),
+        ],
+    }  # fmt: skip
+
+
+_SUFFIX = {
+    "simulate": ".csv",
+    "derive": ".toml",
+    "fit": ".toml",
+    "usd apply": ".usda",
+    "mujoco apply": ".xml",
+}
+
+
+def _needs_engine(name: str) -> None:
+    if name == "usd apply" and importlib.util.find_spec("pxr") is None:
+        pytest.skip("needs pxr")
+    if name == "mujoco apply":
+        if importlib.util.find_spec("mujoco") is None:
+            pytest.skip("needs mujoco")
+        if not (MENAGERIE / "go2.xml").is_file():
+            pytest.skip("needs ../shared/data/menagerie/go2.xml")
+
+
+@pytest.mark.parametrize("name", list(_SUFFIX))
+def test_output_onto_a_device_node_keeps_it_a_device(name: str, tmp_path: Path) -> None:
+    """Write through a character device (a /dev/null twin) given to -o: it stays a device node."""
+    _needs_engine(name)
+    node = tmp_path / f"n{_SUFFIX[name]}"
+    try:
+        os.mknod(node, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    except PermissionError:
+        pytest.skip("making a device node needs root")
+    assert main(_device_commands(node)[name]) == 0
+    assert stat.S_ISCHR(os.stat(node).st_mode) and os.stat(node).st_rdev == os.makedev(1, 3)
+    assert [p.name for p in tmp_path.iterdir()] == [node.name]
+
+
+@pytest.mark.parametrize("name", list(_SUFFIX))
+def test_output_onto_a_fifo_gives_its_reader_the_file(name: str, tmp_path: Path) -> None:
+    """Give a FIFO's reader the whole output; the FIFO stays a FIFO; without a reader: exit 2 at once."""
+    _needs_engine(name)
+    fifo = tmp_path / f"f{_SUFFIX[name]}"
+    os.mkfifo(fifo)
+    argv = _device_commands(fifo)[name]
+    assert main(argv) == 2  # nobody reads yet: refused, never blocked
+    got: list[bytes] = []
+
+    def read() -> None:
+        with open(fifo, "rb") as handle:
+            got.append(handle.read())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    deadline = time.monotonic() + 20
+    while main(argv) == 2 and time.monotonic() < deadline:  # until the reader's open() is pending
+        time.sleep(0.05)
+    reader.join(timeout=20)
+    assert got and len(got[0]) > 20
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert [p.name for p in tmp_path.iterdir()] == [fifo.name]
