@@ -23,6 +23,10 @@ still depends on the forces). A third line drops the constraints altogether: the
 kinds there is their actuation cost alone. A fourth line lets each kind run its own motion (its own
 contacts).
 
+``--robot g1``: the Menagerie G1 (29 DOF, on the floor; ``../shared/data/menagerie/unitree_g1``)
+with the ``unitree-g1`` map's drives on the model's own gains, against its own ``position``
+actuators (goal <= 1.10x, issue 28).
+
 ``--solver pgs|tgs`` (with ``--iterations P V``) runs the plugin's drives as PhysX's articulation
 iterates them (``drive_envelope.mujoco.set_solver``) instead of the exact coupled solve.
 
@@ -42,6 +46,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 GO2 = ROOT.parent / "shared" / "data" / "menagerie" / "scene_floor.xml"
+G1 = ROOT.parent / "shared" / "data" / "menagerie" / "unitree_g1" / "scene.xml"
+G1_GOAL = 1.10  # issue 28: the plugin within 1.10x the G1's own position actuators
 KINDS = ("plugin", "position", "dcmotor")
 KP, KV = 60.0, 2.0
 HOME = np.array([0.0, 0.9, -1.8] * 4)
@@ -111,6 +117,97 @@ def build(
     if kind == "plugin" and solver != "exact":
         set_solver(spec, solver, position_iterations=iterations[0], velocity_iterations=iterations[1])
     return spec.compile(), joints, label
+
+
+def build_g1(kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)) -> Any:
+    """The Menagerie G1 (29 hinges, floor): its own position actuators, or the ``unitree-g1`` map's drives.
+
+    The drives replace each ``position`` actuator in place and keep its kp and kv (``mujoco apply
+    --map unitree-g1`` without gains), so both kinds have the model's own gains.
+    """
+    import mujoco
+
+    from drive_envelope._src.adapters.mujoco.mjcf import Assignment, apply_drives, driven_joints, load_spec
+    from drive_envelope._src.adapters.usd.joint_map import match_joints, read_map, resolve_envelopes
+    from drive_envelope._src.datasheet.maps import robot_map_path
+    from drive_envelope.mujoco import set_solver
+
+    spec = load_spec(G1)
+    if kind == "plugin":
+        # dampratio="1" positions: write each compiled kv (and kp) so the drives keep those gains
+        compiled = spec.compile()
+        for actuator in spec.actuators:
+            index = compiled.actuator(actuator.name).id
+            kp, kv = compiled.actuator_gainprm[index, 0], -compiled.actuator_biasprm[index, 2]
+            actuator.set_to_position(kp=float(kp), kv=float(kv))
+        match = match_joints(read_map(str(robot_map_path("unitree-g1"))), driven_joints(spec))
+        items = [
+            Assignment(joint=item.joint, envelope=item.envelope, where=item.entry.where)
+            for item in resolve_envelopes(match)
+            if item.envelope is not None
+        ]
+        apply_drives(spec, items)
+        if solver != "exact":
+            set_solver(spec, solver, position_iterations=iterations[0], velocity_iterations=iterations[1])
+    model = spec.compile()
+    assert model.nu == 29 and all(model.jnt_type[model.actuator_trnid[:, 0]] == mujoco.mjtJoint.mjJNT_HINGE)
+    return model
+
+
+def g1_targets(model: Any, times: np.ndarray) -> np.ndarray:
+    """The stand pose with every joint waving 0.3 rad at 6 rad/s, phases spread; (len(times), 29)."""
+    key = model.key("stand")
+    qpos = key.qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]]
+    phase = np.arange(model.nu)[None, :]
+    return qpos[None, :] + 0.3 * np.sin(6 * times[:, None] + phase)
+
+
+def _g1_state(model: Any) -> np.ndarray:
+    import mujoco
+
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
+    state = np.zeros(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    return state
+
+
+def main_g1(args: argparse.Namespace) -> int:
+    """The G1 workload: plugin (the map's drives) against the G1's own position actuators."""
+    import mujoco
+    from mujoco import rollout
+
+    models = {kind: build_g1(kind, args.solver, tuple(args.iterations)) for kind in ("plugin", "position")}
+    times = np.arange(args.states) * models["plugin"].opt.timestep
+    control = g1_targets(models["plugin"], times)
+    own = {}
+    for kind, model in models.items():
+        own[kind] = (model, mujoco.MjData(model), _g1_state(model)[None], control[None], args.states)
+    model, data, state0, _, _ = own["plugin"]
+    recorded, _ = rollout.rollout(model, data, state0, control[None])
+    same = {}
+    for kind, (m, d, _, _, _) in own.items():
+        same[kind] = (m, d, _convert(m, recorded[0], model), control[:, None, :], args.states)
+    solver = args.solver if args.solver == "exact" else "{} {}/{}".format(args.solver, *args.iterations)
+    print(
+        f"mujoco {mujoco.__version__}, Menagerie G1 on a floor: nv = {model.nv}, 29 hinges "
+        f"(unitree-g1 map, the model's kp/kv), {mujoco.mjtIntegrator(model.opt.integrator).name}, dt = "
+        f"{model.opt.timestep * 1e3:g} ms, {args.blocks} blocks x {args.states} steps, "
+        f"plugin solver {solver}; median thread CPU time per mj_step:"
+    )
+    alone = {}
+    for kind, (m, _, starts, c, steps) in same.items():
+        free = _unconstrained(m)
+        alone[kind] = (free, mujoco.MjData(free), starts, c, steps)
+    for name, runs in (("same states", same), ("  no constr.", alone), ("own motion", own)):
+        median = _medians(runs, args.blocks)
+        print(
+            f"  {name:12s} plugin {median['plugin'] * 1e6:6.2f} us"
+            f"   position {median['position'] * 1e6:6.2f} us"
+            f"   plugin/position = {median['plugin'] / median['position']:.3f} (goal <= {G1_GOAL:.2f})"
+            f"   plugin - native = {(median['plugin'] - median['position']) * 1e6:+.2f} us"
+        )
+    return 0
 
 
 def targets(times: np.ndarray) -> np.ndarray:
@@ -199,7 +296,13 @@ def main() -> int:
     parser.add_argument(
         "--iterations", type=int, nargs=2, default=(4, 1), metavar=("P", "V"), help="pgs/tgs iterations"
     )
+    parser.add_argument("--robot", choices=("go2", "g1"), default="go2", help="workload (default go2)")
     args = parser.parse_args()
+    if args.robot == "g1":
+        from drive_envelope.mujoco import load_plugin
+
+        load_plugin()
+        return main_g1(args)
 
     import mujoco
     from mujoco import rollout
