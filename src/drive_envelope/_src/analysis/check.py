@@ -56,6 +56,8 @@ __all__ = [
     "MarginSummary",
     "Violation",
     "check_chunks",
+    "histogram_quantile",
+    "margin_scale",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -78,7 +80,7 @@ class _Curve:
     def __init__(self, name: CurveName, cap: float, unit: str) -> None:
         self.name, self.cap, self.unit = name, cap, unit
         # relative numbers need a positive finite scale; a zero cap falls back to absolute units
-        self.scale = cap if 0.0 < cap < math.inf else 1.0
+        self.scale = margin_scale(cap)
         bin_width = self.scale * _WIDTH
         self.inverse_bin = 1.0 / bin_width if bin_width > 1e-300 else None  # else: divide, see add()
         self.histogram = np.zeros(_BINS + 2, dtype=np.int64)
@@ -133,17 +135,29 @@ class _Curve:
             samples_on_limit=self.on_limit,
             time_on_limit=self.time_on_limit if has_time else None,
             worst=self.worst,
+            histogram=self.histogram.copy(),
         )
 
     def _quantile(self, probability: float, samples: int) -> float:
-        """Lower-tail quantile from the histogram: the centre of the bin holding it [unit]."""
-        rank = max(1, math.ceil(probability * samples))
-        k = int(np.searchsorted(np.cumsum(self.histogram), rank))
-        if k == 0:  # below -100 % of the cap: the exact minimum is the best bound we kept
-            return self.minimum
-        if k == _BINS + 1:
-            return self.scale * _HIGH
-        return self.scale * max(_LOW + (k - 0.5) * _WIDTH, self.minimum / self.scale)
+        return histogram_quantile(self.histogram, self.minimum, self.scale, probability, samples)
+
+
+def margin_scale(cap: float) -> float:
+    """The scale of a curve's relative numbers: its cap, or 1 for a zero or infinite cap [unit]."""
+    return cap if 0.0 < cap < math.inf else 1.0
+
+
+def histogram_quantile(
+    histogram: npt.NDArray[np.int64], minimum: float, scale: float, probability: float, samples: int
+) -> float:
+    """Lower-tail quantile from a margin histogram: the centre of the bin holding it [unit]."""
+    rank = max(1, math.ceil(probability * samples))
+    k = int(np.searchsorted(np.cumsum(histogram), rank))
+    if k == 0:  # below -100 % of the cap: the exact minimum is the best bound we kept
+        return minimum
+    if k == _BINS + 1:
+        return scale * _HIGH
+    return scale * max(_LOW + (k - 0.5) * _WIDTH, minimum / scale)
 
 
 class _Context:

@@ -11,7 +11,7 @@ counted on their own and never as outside.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -88,6 +88,8 @@ class Violation:
     """Joint velocity of the sample [rad/s or m/s]."""
     effort: float
     """Effort of the sample [N*m or N]."""
+    source: str | None = None
+    """The log of a fleet the sample is in (row and time are that log's), None for one log."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -112,6 +114,9 @@ class MarginSummary:
     """Time spent on the limit [s]; None without a time column."""
     worst: Violation | None
     """The sample furthest outside (released samples not considered), None when none is outside."""
+    histogram: npt.NDArray[np.int64] | None = field(default=None, compare=False, repr=False)
+    """Sample counts of the margin histogram (0.1 % of the cap per bin, under- and overflow at the
+    ends): what reports of a fleet's parts add up to merge their quantiles exactly."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -184,6 +189,8 @@ class CheckReport:
     """The thresholds used."""
     unused_keys: tuple[UnusedKey, ...] = ()
     """Keys of a joint mapping that gave no joint of the log its envelope (a warning each)."""
+    parts: int = 1
+    """Logs (fleet parts) merged into this report."""
 
     @property
     def passed(self) -> bool:
@@ -192,7 +199,7 @@ class CheckReport:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-compatible dict (SI numbers; an infinite number is the string ``"inf"`` or ``"-inf"``)."""
-        return {
+        data: dict[str, Any] = {
             "source": self.source,
             "passed": self.passed,
             "tolerance": self.options.tolerance,
@@ -201,6 +208,9 @@ class CheckReport:
             "joints": [_joint_dict(j, self.options.tolerance) for j in self.joints],
             "unused_keys": [{"key": unused.key, "reason": unused.reason} for unused in self.unused_keys],
         }
+        if self.parts > 1:
+            data["parts"] = self.parts
+        return data
 
 
 def json_float(value: float | None) -> float | str | None:
@@ -253,5 +263,6 @@ def _margin_dict(summary: MarginSummary) -> dict[str, Any]:
             "time": json_float(worst.time),
             "velocity": worst.velocity,
             "effort": worst.effort,
+            **({} if worst.source is None else {"source": worst.source}),
         },
     }

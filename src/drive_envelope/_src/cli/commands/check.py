@@ -30,7 +30,8 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "log",
         metavar="LOG",
-        help="log file: .csv, .tsv, .txt (optionally .gz), .parquet, or a simulate .json trajectory",
+        help="log file: .csv, .tsv, .txt (optionally .gz), .parquet, a simulate .json trajectory, a ROS 2 "
+        "bag; or a fleet: a folder, a glob ('logs/**/*.parquet') or a partitioned Parquet dataset",
     )
     add_column_arguments(parser)
     parser.add_argument(
@@ -68,6 +69,13 @@ def register(subparsers: Any) -> None:
         default=None,
         help="also write the envelope plot with violations in red (.png/.svg/.pdf; one file per joint)",
     )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        default=None,
+        help="check a fleet (LOG a folder, glob or partitioned Parquet dataset) on this running Dask "
+        "distributed scheduler (tcp://host:8786); a fleet runs in this process without it",
+    )
     add_force_argument(parser)
     parser.set_defaults(func=_run)
 
@@ -91,7 +99,26 @@ def _run(args: argparse.Namespace) -> int:
         keep_points=20000 if args.plot else 0,
         max_joints=args.max_joints,
     )
-    report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
+    from drive_envelope._src.analysis.fleet import is_fleet
+
+    if is_fleet(args.log) or args.scheduler is not None:  # many logs: one report per part, merged
+        from drive_envelope._src.analysis.api import resolve_envelopes
+        from drive_envelope._src.analysis.fleet import check_fleet
+        from drive_envelope._src.errors import InputError
+
+        if args.plot:
+            raise InputError(f"--plot draws one log; {args.log!r} is a fleet of logs")
+        fleet = check_fleet(
+            resolve_envelopes(args.envelope),
+            args.log,
+            columns=columns_from_args(args),
+            options=options,
+            scheduler=args.scheduler,
+        )
+        report = fleet.report
+        status(f"checked {len(fleet.parts)} log(s), {fleet.rows} samples in {fleet.wall_time_s:.1f} s")
+    else:
+        report = check_log(args.envelope, args.log, columns=columns_from_args(args), options=options)
     for message in check_warnings(report):  # mapping keys no joint of the log took
         warn(message)
     if args.plot:
