@@ -51,8 +51,11 @@ def split_logs(folder: Path) -> dict[str, list[Path]]:
     return splits
 
 
-def run_identify(splits: dict[str, list[Path]], fit: str, seed: int, generations: int) -> dict[str, object]:
-    """One identification; its errors [mrad] and wall time [s]."""
+def run_identify(
+    splits: dict[str, list[Path]], fit: str, seed: int, generations: int, restarts: int = 3
+) -> dict[str, object]:
+    """One identification; its errors [mrad], wall time [s] and whether each reported line binds."""
+    from drive_envelope._src.identify.canonical import binding_lines
     from drive_envelope.identify import SearchOptions, identify
 
     started = time.perf_counter()
@@ -61,7 +64,7 @@ def run_identify(splits: dict[str, list[Path]], fit: str, seed: int, generations
         STAND,
         validate=splits["holdout"],
         fit=fit.split(","),
-        options=SearchOptions(seed=seed, generations=generations),
+        options=SearchOptions(seed=seed, generations=generations, restarts=restarts),
     )
     wall = time.perf_counter() - started
     holdout = [1e3 * e.mae_position for e in result.validation]
@@ -72,6 +75,12 @@ def run_identify(splits: dict[str, list[Path]], fit: str, seed: int, generations
         "per_log": dict(zip([e.log.name for e in result.validation], holdout, strict=True)),
         "wall": wall,
         "values": {name: estimate.value for name, estimate in result.parameters.items()},
+        "binds": binding_lines({name: estimate.value for name, estimate in result.parameters.items()}),
+        "spread": {
+            name: estimate.spread
+            for name, estimate in result.parameters.items()
+            if estimate.spread is not None
+        },
     }
 
 
@@ -175,6 +184,25 @@ def _print_table(runs: dict[str, list[dict[str, object]]], shipped: dict[str, di
         print(f"{'BAM M1 fitted here':44s} {'-':>7s} {'-':>8s} {'-':>6s} {'-':>9s}  (BAM not installed)")
 
 
+def _print_seed_study(items: list[dict[str, object]]) -> None:
+    """identify's answer across seeds: held-out spread, the envelope, whether each line binds."""
+    if len(items) < 2:
+        return
+    holdout = [float(item["holdout"]) for item in items]  # type: ignore[arg-type]
+    print(f"\nidentify across {len(items)} seeds: held-out median {statistics.median(holdout):.2f} mrad, "
+          f"max - min {max(holdout) - min(holdout):.2f} mrad")  # fmt: skip
+    names = ("max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient",
+             "duty_effort")  # fmt: skip
+    for name in names:
+        values = [float(item["values"][name]) for item in items if name in item["values"]]  # type: ignore[index, operator]
+        if values:
+            print(f"  {name:30s} " + " ".join(f"{value:.4g}" for value in values))
+    binds = [item["binds"] for item in items]
+    print("  every reported line binds: " + ", ".join(
+        "yes" if all(b.values()) else f"no ({b})" for b in binds  # type: ignore[union-attr]
+    ))  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the comparison and print the table."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
@@ -189,6 +217,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=1, help="interleaved rounds (medians reported)")
     parser.add_argument("--seeds", default="0", help="identify seeds, one per round (cycled)")
     parser.add_argument("--generations", type=int, default=60, help="identify's generations")
+    parser.add_argument("--restarts", type=int, default=3, help="identify's restarts (default 3)")
     parser.add_argument("--fit", default=ENVELOPE_FIT, help="identify's --fit")
     parser.add_argument("--json", type=Path, default=None, help="also write the results as JSON")
     args = parser.parse_args(argv)
@@ -210,7 +239,9 @@ def main(argv: list[str] | None = None) -> int:
         for round_index in range(args.rounds):
             seed = seeds[round_index % len(seeds)]
             print(f"round {round_index + 1}: identify (seed {seed})", file=sys.stderr)
-            runs.setdefault("identify", []).append(run_identify(splits, args.fit, seed, args.generations))
+            runs.setdefault("identify", []).append(
+                run_identify(splits, args.fit, seed, args.generations, args.restarts)
+            )
             for model in args.bam_models.split(",") if have_bam else ():
                 print(f"round {round_index + 1}: bam.fit {model} ({args.bam_trials} trials)", file=sys.stderr)
                 result = run_bam(args.bam_python, model, folders, args.bam_trials, work)
@@ -220,6 +251,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{len(splits['train'])} training logs, {len(splits['holdout'])} held-out logs; "
           f"{args.rounds} round(s), medians; errors in mrad")  # fmt: skip
     _print_table(runs, shipped, args, have_bam)
+    _print_seed_study(runs.get("identify", []))
     if args.json is not None:
         args.json.write_text(
             json.dumps({"runs": runs, "shipped": shipped}, indent=1) + "\n", encoding="utf-8"
