@@ -229,8 +229,17 @@ void WarnOtherActuators(const mjModel* m, const Structure& s) {
       }
     }
     if (m->jnt_actfrclimited[drive.joint]) {
-      WarnOnce(std::string(kPluginName) + ": joint " + JointName(m, drive.joint) +
-               " has an actuatorfrcrange: MuJoCo clips the drive's effort after the envelope");
+      // a range at or beyond max_effort cannot bind: the envelope bounds the total effort first
+      const mjtNum* range = m->jnt_actfrcrange + 2 * drive.joint;
+      double tightest = std::min(std::fabs(range[0]), std::fabs(range[1]));
+      DriveParams params;
+      std::string ignored;
+      bool read = DriveParams::FromModel(m, drive.actuator, &params, &ignored) < 0;
+      if (!read || tightest < params.max_effort) {
+        WarnOnce(std::string(kPluginName) + ": joint " + JointName(m, drive.joint) +
+                 " has an actuatorfrcrange below the drive's max_effort: MuJoCo clips the "
+                 "drive's effort after the envelope");
+      }
     }
   }
 }
