@@ -345,3 +345,22 @@ def test_zero_generations_and_unknown_stand_keys(
     assert main(["identify", str(logs[0]), "--stand", str(stand)]) == 2
     valid = "name, description, joint, drive, envelope, load, pendulum, friction, simulation, servo, bounds"
     assert f"unknown key 'max_effort'; valid keys: {valid}" in capsys.readouterr().err
+
+
+def test_progress_lines_when_stderr_is_not_a_terminal(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Off a terminal (a log file, CI) a line per report period names restart, phase and best cost."""
+    from drive_envelope._src.cli.commands import identify as command
+
+    monkeypatch.setattr(command, "_REPORT_EVERY", 0.0)  # every step, instead of every 10 s
+    stand, logs = bench
+    argv = ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort", "--generations", "2",
+            "--population", "2", "--restarts", "2"]  # fmt: skip
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "identify: restart 1/2, search 1/2, best cost " in err
+    assert "identify: restart 2/2, polish 1/30, best cost " in err  # the polish is shown too
