@@ -45,13 +45,14 @@ range); the default mode leaves the sign of a zero result unspecified. Where no 
 (checked once per call), PhysX's selects are ``numpy.minimum``/``numpy.maximum``, which also return
 their second operand on a tie.
 
-Speed (``benchmarks/bench_kernels.py --baseline``, N = 1e6 float64, medians of 21 interleaved
-rounds, 2-core EPYC): the default mode runs in 27-30x the time of ``np.clip`` on the same arrays,
-0.80-0.82x the former float64 fast path (which declined to a literal port whenever a NaN could
-arise; 32-37x ``np.clip`` in the same runs). ``physx_exact=True`` takes 41-47x, 1.25-1.27x that
-fast path: its zeros keep PhysX's sign (``s*(dev -+ s*m)`` numerators, per-sign selects on ties),
-which the fast path did not do. In float32 the two modes take 0.24x and 0.36x the former literal
-float32 port. Selects on the request's sign are done on bit patterns (``_select``): ``numpy.where``
+Speed (``benchmarks/bench_kernels.py``, N = 1e6 float64, medians of interleaved rounds, thread
+CPU time, 2-core EPYC shared with other jobs): the default mode runs in 11-12x the time of
+``np.clip`` on the same arrays (2.2-2.7x faster than the previous release's 27-30x), because a
+large clamp runs in blocks of ``_BLOCK`` elements that stay in the cache, and two reductions skip
+the per-element selects where every curve has one slope sign or no denominator is near 0; the
+issue's goal of 10x is not met (the remaining ~35 passes each cost about a third of ``np.clip``).
+``physx_exact=True`` takes 18-19x. In float32 the two modes take 0.24x and 0.36x the former
+literal float32 port. Selects on the request's sign are done on bit patterns (``_select``): ``numpy.where``
 under a mask that flips at random costs ten integer passes.
 """
 
@@ -246,10 +247,45 @@ def clamp_drive_impulse(
     shape = np.broadcast_shapes(*(a.shape for a in args))
     # IEEE overflow, inf - inf and x/0 happen inside PhysX too and are part of what we reproduce
     with np.errstate(divide="ignore", over="ignore", invalid="ignore", under="ignore"):
-        result = _clamp(*args, exact=bool(physx_exact))
+        if math.prod(shape) >= 2 * _BLOCK:
+            result = _clamp_blocks(args, shape, exact=bool(physx_exact))
+        else:
+            result = _clamp(*args, exact=bool(physx_exact))
     if result.shape != shape:  # an argument that no bound used still sets the shape
         result = np.array(np.broadcast_to(result, shape))
     return np.asarray(result, dtype=kind)  # a 0-d array, not a NumPy scalar, for scalar arguments
+
+
+_BLOCK = 65536
+"""Elements per block of a large clamp (``_clamp_blocks``).
+
+The clamp is some sixty array passes; on a million DOFs each pass streams its operands through
+memory, on blocks of this size they stay in the cache: 2.7x faster at N = 1e6 float64 (16 ms
+against 44 ms, thread CPU time, 2-core EPYC). Smaller blocks pay the per-call overhead of the
+passes (8192: 21 ms), larger ones leave the cache (262144: 28 ms).
+"""
+
+
+def _clamp_blocks(args: list[Array], shape: tuple[int, ...], *, exact: bool) -> Array:
+    """:func:`_clamp` over a large broadcast shape, in blocks of ``_BLOCK`` elements.
+
+    Every element's result depends on that element's arguments only (the per-call checks, such
+    as whether any bound is NaN, pick between formulas that agree wherever both apply), so the
+    blocks give the same bits as one call.
+    """
+    flat = []
+    for a in args:
+        if a.size == 1:
+            flat.append(a.reshape(()))  # a 0-d operand broadcasts in every block
+        else:
+            flat.append(np.broadcast_to(a, shape).reshape(-1))  # a view unless a is broadcast
+    size = math.prod(shape)
+    out = np.empty(size, dtype=args[0].dtype)
+    for start in range(0, size, _BLOCK):
+        block = slice(start, start + _BLOCK)
+        part = _clamp(*(a if a.ndim == 0 else a[block] for a in flat), exact=exact)
+        out[block] = part
+    return out.reshape(shape)
 
 
 def _into(ufunc: np.ufunc, a: Array, b: Any) -> Array:
@@ -348,14 +384,23 @@ def _bounds(
     bound2 = _into(np.true_divide, num2, denom2)
     if parts is not None:
         dev, limit = parts
-        bound1 = _split_overflow(bound1, num1, dev, np.negative(limit), denom1)
+        bound1 = _split_overflow(bound1, num1, dev, limit, denom1, negate=True)
         bound2 = _split_overflow(bound2, num2, dev, limit, denom2)
-    rising = _mask(np.greater_equal(denom1, zero), real)
     if signs is None:
         nan_free = True
-        upper = _select(rising, bound2, np.minimum(bound1, bound2), real)
-        lower = _into(np.bitwise_and, _bits(bound1, real), rising).view(real)  # where(rising, b1, 0)
+        # one slope sign for every element is the common case (a whole robot's drives on one side
+        # of r = k): two reductions then replace the per-element selects (7 passes)
+        low, high = np.min(denom1, initial=np.inf), np.max(denom1, initial=-np.inf)
+        if low >= zero:  # every curve rising
+            upper, lower = bound2, bound1
+        elif high < zero:  # every curve falling (a NaN denominator fails both tests)
+            upper, lower = np.minimum(bound1, bound2), np.zeros((), dtype=real)
+        else:
+            rising = _mask(np.greater_equal(denom1, zero), real)
+            upper = _select(rising, bound2, np.minimum(bound1, bound2), real)
+            lower = _into(np.bitwise_and, _bits(bound1, real), rising).view(real)  # where(rising, b1, 0)
     else:
+        rising = _mask(np.greater_equal(denom1, zero), real)
         nan_free = not _has_nan(bound1, bound2, request)
         pmin = np.minimum if nan_free else _pmin
         # PxMax(0, bound1) (0 is never NaN, so numpy.maximum selects alike); falling: 0
@@ -365,8 +410,8 @@ def _bounds(
         first = np.bitwise_xor(_bits(bound1, real), swap).view(real)
         second = _into(np.bitwise_xor, swap, _bits(bound2, real)).view(real)
         upper = pmin(_select(rising, bound2, pmin(first, second), real), request)
-    flat = np.abs(denom1) < eps
-    if np.any(flat):  # denom1 ~ 0: the lower curve is a yes/no test on the gap num1
+    flat = _near_zero(denom1, eps)
+    if flat is not None:  # denom1 ~ 0: the lower curve is a yes/no test on the gap num1
         near = np.abs(num1) < eps
         if signs is None:
             flat_lower = np.where(near | (num1 <= zero), zero, real(np.nan))
@@ -376,16 +421,28 @@ def _bounds(
             flat_lower = np.where(no, real(PX_MAX_F32), signs.zero)
         lower = np.where(flat, flat_lower, lower)
         upper = np.where(flat, bound2, upper)
-    ignored = np.abs(denom2) < eps
-    if np.any(ignored):  # the curve is ignored
+    ignored = _near_zero(denom2, eps)
+    if ignored is not None:  # the curve is ignored
         big = real(np.inf if signs is None else PX_MAX_F32)
         lower = np.where(ignored, -big, lower)
         upper = np.where(ignored, big, upper)
     return lower, upper, nan_free
 
 
-def _split_overflow(bound: Array, num: Array, a: Array, b: Any, denom: Any) -> Array:
-    """``(a + b) / denom``, as ``a/denom + b/denom`` where ``a + b`` overflowed with ``a``, ``b`` finite.
+def _near_zero(denom: Any, eps: Any) -> Array | None:
+    """The mask ``|denom| < eps``, or None where no element is that close to 0.
+
+    Two reductions decide the common case (every denominator on one side, away from 0) without
+    the three passes of the mask; a NaN fails both tests and takes the mask.
+    """
+    if np.min(denom, initial=np.inf) >= eps or np.max(denom, initial=-np.inf) <= -eps:
+        return None
+    near = np.abs(denom) < eps
+    return near if np.any(near) else None
+
+
+def _split_overflow(bound: Array, num: Array, a: Array, b: Any, denom: Any, *, negate: bool = False) -> Array:
+    """``(a -+ b) / denom``, as ``a/denom -+ b/denom`` where the numerator overflowed, ``a``, ``b`` finite.
 
     PhysX's form turns a finite bound into an infinite one there (operands near the end of the float
     range), which loses the curve; the split form does not. One reduction finds the common case
@@ -396,7 +453,8 @@ def _split_overflow(bound: Array, num: Array, a: Array, b: Any, denom: Any) -> A
     over = np.isinf(num) & np.isfinite(a) & np.isfinite(b)
     if not np.any(over):
         return bound
-    split = np.true_divide(a, denom) + np.true_divide(b, denom)
+    part = np.true_divide(b, denom)
+    split = np.true_divide(a, denom) + (np.negative(part) if negate else part)
     return np.where(over, split, bound)
 
 
@@ -478,7 +536,8 @@ def _clamp(
         hi2 = np.where(plain, real(np.inf), hi2)
     # |x| <= max_x holds inside eq. 1 exactly; as a bound it survives rounding (and R = 0 is it).
     # The floor also holds PhysX's PxMax(0, bound1) of both curves.
-    floor = np.maximum(np.negative(max_x), zero)
+    # -max_x <= 0 unless a cap is negative (or NaN): then the floor is the element's own
+    floor = zero if np.min(max_x, initial=np.inf) >= zero else np.maximum(np.negative(max_x), zero)
     lower = _into(np.maximum, np.maximum(lo1, lo2), floor)
     upper = _into(np.minimum, _into(np.minimum, np.minimum(hi1, hi2), max_x), request)
     # lower <= min(upper, x) is PhysX's lower <= upper here; a NaN fails it and the drive lets go
