@@ -1,0 +1,212 @@
+"""Multi-DOF test-stand scenarios: a fixed-base chain (or tree) of driven links under gravity.
+
+A chain scenario describes an articulation as PhysX builds it: a fixed base and links, each
+hung on one driven joint (revolute about, or prismatic along, the X, Y or Z axis of its parent's
+frame). Every link frame is parallel to its parent's at zero joint position (no fixed rotations), so
+a joint's ``origin`` is where it sits in its parent's frame, and the link's centre of mass and
+principal inertia are given in its own frame. Gravity acts along the world's -Z (``[simulation]
+gravity``; a chain has gravity by default, unlike the one-joint stand). Each joint has its drive,
+envelope, friction, armature, applied effort and target, read with the one-joint tables' rules.
+
+A one-joint scenario (:class:`~drive_envelope._src.scenario.spec.Scenario`) is a chain of one:
+:func:`chain_from_scenario` turns it into the equivalent chain (the link's inertia about the joint
+axis, a pendulum's point mass, gravity in the joint's plane).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.checks import check_finite
+from drive_envelope._src.scenario.loads import FrictionSpec
+from drive_envelope._src.scenario.spec import DriveSpec, LoadSpec, Scenario, SimulationSpec
+
+__all__ = ["AXES", "ChainJoint", "ChainScenario", "Vector3", "chain_from_scenario"]
+
+Vector3 = tuple[float, float, float]
+AXES = ("x", "y", "z")
+"""Joint axes: the X, Y or Z axis of the parent link's frame."""
+
+
+def _vector(name: str, value: object, *, nonnegative: bool = False) -> Vector3:
+    if not isinstance(value, (tuple, list)) or len(value) != 3:
+        raise InputError(f"{name} must be three numbers [x, y, z], got {value!r}")
+    for i, item in enumerate(value):
+        check_finite(f"{name}[{i}]", item, nonnegative=nonnegative)  # type: ignore[arg-type]
+    return (float(value[0]), float(value[1]), float(value[2]))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ChainJoint:
+    """One driven joint of a chain and the link it carries."""
+
+    name: str
+    """Joint name (unique in the chain), used for columns, prims and MJCF names."""
+    type: JointType = "revolute"
+    """``"revolute"`` (rad, N*m) or ``"prismatic"`` (m, N)."""
+    axis: str = "z"
+    """``"x"``, ``"y"`` or ``"z"``: the joint axis in the parent link's frame (and the link's)."""
+    parent: int = -1
+    """Index of the parent joint's link in the chain, ``-1`` for the fixed base; parents come first."""
+    origin: Vector3 = (0.0, 0.0, 0.0)
+    """Joint position in the parent link's frame (the base's frame is the world's) [m]."""
+    mass: float
+    """Link mass [kg]; ``> 0``."""
+    com: Vector3 = (0.0, 0.0, 0.0)
+    """Link centre of mass in the link's frame (whose origin is the joint) [m]."""
+    inertia: Vector3
+    """Principal moments of inertia about the centre of mass, along the link frame's axes [kg*m^2];
+    each ``> 0``."""
+    armature: float = 0.0
+    """Rotor inertia reflected to the joint (PhysX ``armature``) [kg*m^2 or kg]; ``>= 0``."""
+    initial_position: float = 0.0
+    """Joint position at t = 0 [rad or m]."""
+    initial_velocity: float = 0.0
+    """Joint velocity at t = 0 [rad/s or m/s]."""
+    drive: DriveSpec = field(default_factory=DriveSpec)
+    """The joint's PhysX drive."""
+    envelope: PerformanceEnvelope | None = None
+    """The performance envelope; None gives PhysX's plain drive (``+-drive.max_effort``)."""
+    load: LoadSpec = field(default_factory=LoadSpec)
+    """Applied joint effort (actuator) and external effort on the joint (not actuator)."""
+    friction: FrictionSpec = field(default_factory=FrictionSpec)
+    """PhysX joint friction; none by default."""
+
+    def __post_init__(self) -> None:
+        where = f"joint {self.name!r}"
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise InputError(f"a chain joint needs a non-empty name, got {self.name!r}")
+        if self.type not in ("revolute", "prismatic"):
+            raise InputError(f"{where}: type must be 'revolute' or 'prismatic', got {self.type!r}")
+        if self.axis not in AXES:
+            raise InputError(f"{where}: axis must be one of 'x', 'y', 'z', got {self.axis!r}")
+        if isinstance(self.parent, bool) or not isinstance(self.parent, int) or self.parent < -1:
+            raise InputError(f"{where}: parent must be -1 (the base) or a joint index, got {self.parent!r}")
+        object.__setattr__(self, "origin", _vector(f"{where}: origin", self.origin))
+        object.__setattr__(self, "com", _vector(f"{where}: com", self.com))
+        object.__setattr__(self, "inertia", _vector(f"{where}: inertia", self.inertia, nonnegative=True))
+        check_finite(f"{where}: mass", self.mass, positive=True)
+        if min(self.inertia) <= 0.0:
+            raise InputError(f"{where}: inertia must be three numbers > 0 [kg*m^2], got {list(self.inertia)}")
+        check_finite(f"{where}: armature", self.armature, nonnegative=True)
+        check_finite(f"{where}: initial_position", self.initial_position)
+        check_finite(f"{where}: initial_velocity", self.initial_velocity)
+        if self.envelope is not None:
+            if self.envelope.joint != self.type:
+                raise InputError(
+                    f"{where}: the envelope is for a {self.envelope.joint} joint, not {self.type}"
+                )
+            if self.envelope.max_effort != self.drive.max_effort:
+                raise InputError(
+                    f"{where}: envelope.max_effort ({self.envelope.max_effort!r}) must equal "
+                    f"drive.max_effort ({self.drive.max_effort!r}): PhysX uses the drive's maxForce"
+                )
+
+    @property
+    def axis_index(self) -> int:
+        """0, 1 or 2 for the X, Y or Z axis."""
+        return AXES.index(self.axis)
+
+    def effective_envelope(self) -> PerformanceEnvelope | None:
+        """The envelope PhysX applies to drive + applied effort (see ``Scenario.effective_envelope``)."""
+        if self.envelope is not None:
+            return self.envelope
+        if math.isinf(self.drive.max_effort):
+            return None
+        return PerformanceEnvelope(max_effort=self.drive.max_effort, joint=self.type)
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ChainScenario:
+    """A multi-DOF test stand: a fixed-base articulation of driven joints, gravity and the solver."""
+
+    joints: tuple[ChainJoint, ...]
+    """The joints in PhysX's link order: every parent before its children."""
+    simulation: SimulationSpec = field(default_factory=SimulationSpec)
+    """Time step, duration, PhysX solver and gravity (along world -Z) [m/s^2]."""
+    name: str = ""
+    """Label for outputs (defaults to the file's stem)."""
+    description: str = ""
+    """Free text from the file."""
+
+    def __post_init__(self) -> None:
+        joints = tuple(self.joints)
+        object.__setattr__(self, "joints", joints)
+        if not joints:
+            raise InputError("a chain scenario needs at least one joint in [[joints]]")
+        names = set()
+        for index, joint in enumerate(joints):
+            if not isinstance(joint, ChainJoint):
+                raise InputError(f"joints[{index}] must be a ChainJoint, got {type(joint).__name__}")
+            if joint.name in names:
+                raise InputError(f"joints[{index}]: the name {joint.name!r} is used twice")
+            names.add(joint.name)
+            if joint.parent >= index:
+                raise InputError(
+                    f"joint {joint.name!r}: parent {joint.parent} must be an earlier joint (or -1, the "
+                    f"base); joints are listed parents first"
+                )
+
+    @property
+    def dofs(self) -> int:
+        """Number of joints (one DOF each)."""
+        return len(self.joints)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The joint names, in order."""
+        return tuple(joint.name for joint in self.joints)
+
+    @property
+    def is_chain(self) -> bool:
+        """Whether every joint hangs on the previous one (a serial chain, not a branching tree)."""
+        return all(joint.parent == index - 1 for index, joint in enumerate(self.joints))
+
+
+def chain_from_scenario(scenario: Scenario) -> ChainScenario:
+    """The one-joint scenario as a chain of one.
+
+    The joint turns about (or slides along) Z; the link carries the scenario's inertia about its
+    centre of mass, which is on the axis without a ``[pendulum]`` and, with one, the point mass
+    ``distance`` from the axis, hanging along -X... at ``-angle_offset``: gravity then acts along
+    -X's world counterpart in the joint's plane. A constant ``load.external_effort`` stays a joint
+    effort. With no pendulum the chain's gravity is 0, as on the one-joint stand.
+    """
+    import dataclasses
+
+    joint = scenario.joint
+    pendulum = scenario.pendulum
+    revolute = joint.type == "revolute"
+    if pendulum is None:
+        mass = 1.0 if revolute else joint.inertia
+        com: Vector3 = (0.0, 0.0, 0.0)
+        gravity = 0.0
+    else:
+        mass, gravity = pendulum.mass, scenario.simulation.gravity
+        # chains pull along world -Z: the joint turns about Y, the mass hangs along -Z at 0
+        offset, distance = pendulum.angle_offset, pendulum.distance
+        com = (-distance * math.sin(offset), 0.0, -distance * math.cos(offset))
+    inertia_about_axis = joint.inertia if revolute else 1.0
+    axis = "y" if pendulum is not None else "z"
+    single = ChainJoint(
+        name=scenario.name or "joint",
+        type=joint.type,
+        axis=axis,
+        mass=mass,
+        com=com,
+        inertia=(inertia_about_axis,) * 3,
+        armature=joint.armature,
+        initial_position=joint.initial_position,
+        initial_velocity=joint.initial_velocity,
+        drive=scenario.drive,
+        envelope=scenario.envelope,
+        load=scenario.load,
+        friction=scenario.friction,
+    )
+    simulation = dataclasses.replace(scenario.simulation, gravity=gravity)
+    return ChainScenario(
+        joints=(single,), simulation=simulation, name=scenario.name, description=scenario.description
+    )
