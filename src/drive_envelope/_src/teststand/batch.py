@@ -265,7 +265,8 @@ def _step(
         velocity = velocity + c.response * external * dt
         desc = _desc(solver, c, stiffness, damping, target_position - position, target_velocity, dt)
         moved = velocity
-        for i in range(solver.position_iterations + solver.velocity_iterations):
+        # PhysX runs at least one velocity sweep: 0 velocity iterations report one more sweep's velocity
+        for i in range(solver.position_iterations + max(1, solver.velocity_iterations)):
             velocity, impulse = _drive(
                 stand, c, velocity, impulse, desc, delta_position=0.0, elapsed=0.0, timestep=dt,
                 per_step=False, tgs_velocity_iteration=False,

@@ -18,7 +18,8 @@ single joint on a fixed base (``physx/source/lowleveldynamics``):
 * PGS (``DySolverCore.cpp``): applied and external efforts and gravity enter the velocity once
   over ``dt``; drive and friction are recomputed every position and velocity iteration (their
   impulses accumulate over the step); the joint position integrates with the velocity after the
-  position iterations, ``q1 = q0 + v*dt``;
+  position iterations, ``q1 = q0 + v*dt``; at least one velocity iteration runs (PhysX reports the
+  velocity of one more sweep when 0 are configured);
 * TGS with external forces every substep (``DyTGSDynamics.cpp``, as PhysX runs through USD): each
   position iteration is a substep that applies the efforts and gravity over ``stepDt``
   (``applyTgsSubstepForces``), clamps the substep's drive impulse per step (``isPerStep``: budget
@@ -228,7 +229,9 @@ def _pgs_step(setup: _Setup, command: _Command, position: float, velocity: float
         )  # fmt: skip
         velocity, friction = _solve_friction(setup, velocity, friction, timestep=dt, per_step=False)
     position_velocity = velocity  # PGS integrates positions with the position-iteration velocity
-    for _ in range(sim.velocity_iterations):
+    # PhysX runs at least one velocity sweep: with 0 velocity iterations configured the reported
+    # velocity still comes from one more sweep (real PhysX, viscous friction: 0.00267 rad/s)
+    for _ in range(max(1, sim.velocity_iterations)):
         velocity, impulse = _solve_drive(
             setup, velocity, impulse, desc, delta_position=0.0, elapsed=0.0, timestep=dt,
             per_step=False, tgs_velocity_iteration=False,
