@@ -242,9 +242,11 @@ def test_replace_converts_the_first_actuator_in_place_and_fixes_keyframes(mujoco
 
     spec = mujoco.MjSpec.from_string(MOTORS)
     hip = add_drive(spec, "hip", envelope=_env(), stiffness=30, damping=1, replace=True, effort_sensor=False)
-    knee = add_drive(
-        spec, "knee", envelope=_env(), stiffness=50, damping=2, replace=True, effort_sensor=False
-    )
+    deleted = r"'knee_extra' \(motor\) deleted: .* the 2 actuator\(s\) after them move"
+    with pytest.warns(UserWarning, match=deleted):
+        knee = add_drive(
+            spec, "knee", envelope=_env(), stiffness=50, damping=2, replace=True, effort_sensor=False
+        )
     assert (hip.name, hip.replaced) == ("hip_motor", ("hip_motor",))
     assert (knee.name, knee.replaced) == ("knee_pos", ("knee_pos", "knee_extra"))
     model = spec.compile()

@@ -7,7 +7,12 @@ keeps its layout), group, delay and control range, and becomes a plugin actuator
 default class (so no class of the robot can give it a ``forcerange`` or a ``biastype``); the others
 are deleted. Keyframe controls follow: a deleted actuator's column goes, a new input's column is
 added (the joint's key position for ``pos``, 0 for ``vel`` and ``ff``), and a motor's torque
-becomes the joint's key position.
+becomes the joint's key position (a key without ``ctrl``, whose controls MuJoCo reads as 0, gets one
+where a control changes meaning).
+
+Gains and control ranges are read from the model MuJoCo compiled when one is given: a ``position``
+actuator with ``dampratio`` has its kv only there, and an ``inheritrange`` control range is the joint's
+range only there; the spec holds the ratio and the factor.
 """
 
 from __future__ import annotations
@@ -25,10 +30,15 @@ if TYPE_CHECKING:
 __all__ = [
     "ExistingActuator",
     "KeyPlan",
+    "compiled_id",
     "convert_actuator",
+    "convert_channel",
+    "describe_kind",
+    "feed_forward_motor",
     "gain_kind",
     "is_drive",
     "joint_actuators",
+    "primary_actuator",
     "update_keyframes",
 ]
 
@@ -61,15 +71,50 @@ def is_drive(spec: mujoco.MjSpec, actuator: Any) -> bool:
     return any(p.name == actuator.plugin.name and p.plugin_name == PLUGIN_NAME for p in spec.plugins)
 
 
-def _kind(spec: mujoco.MjSpec, actuator: Any) -> tuple[str, float | None, float | None]:
-    """(kind, kp, kv) of an ``MjsActuator`` from its gain and bias (MuJoCo's shortcuts' layout)."""
+def compiled_id(model: mujoco.MjModel | None, actuator: Any, index: int) -> int:
+    """The id in ``model`` (compiled from the spec before any edit) of spec actuator ``index``, or -1."""
+    import mujoco
+
+    if model is None:
+        return -1
+    if actuator.name:
+        return int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator.name))
+    return index if index < model.nu else -1
+
+
+def _kind(
+    spec: mujoco.MjSpec, actuator: Any, model: mujoco.MjModel | None = None, index: int = -1
+) -> tuple[str, float | None, float | None]:
+    """(kind, kp, kv) of an ``MjsActuator`` from its gain and bias (MuJoCo's shortcuts' layout).
+
+    With ``model`` (compiled from ``spec``), the compiled gain and bias are read: ``dampratio``
+    becomes a kv there, and in the spec it is a positive ``biasprm[2]`` that reads as no PD.
+    """
     if is_drive(spec, actuator):
         return "drive", float(actuator.dynprm[4]), float(actuator.dynprm[5])
     if actuator.plugin.active:
         return "other", None, None
+    i = compiled_id(model, actuator, index)
+    if model is not None and i >= 0:
+        return gain_kind(
+            int(model.actuator_gaintype[i]),
+            int(model.actuator_biastype[i]),
+            [float(v) for v in model.actuator_gainprm[i]],
+            [float(v) for v in model.actuator_biasprm[i]],
+        )
     return gain_kind(
         int(actuator.gaintype), int(actuator.biastype), list(actuator.gainprm), list(actuator.biasprm)
     )
+
+
+def describe_kind(kind: str) -> str:
+    """``kind`` as a phrase for messages: "a position actuator", "a motor", "not a PD actuator"."""
+    return {
+        "position": "a position actuator",
+        "velocity": "a velocity actuator",
+        "motor": "a motor",
+        "drive": "an envelope drive",
+    }.get(kind, "neither a motor nor a PD actuator (its gain and bias have no kp and kv to read)")
 
 
 def gain_kind(
@@ -90,8 +135,17 @@ def gain_kind(
     return "other", None, None
 
 
-def joint_actuators(spec: mujoco.MjSpec, joint: str) -> list[ExistingActuator]:
-    """The actuators of ``spec`` with a joint transmission on ``joint``, in model order."""
+def joint_actuators(
+    spec: mujoco.MjSpec, joint: str, model: mujoco.MjModel | None = None
+) -> list[ExistingActuator]:
+    """The actuators of ``spec`` with a joint transmission on ``joint``, in model order.
+
+    Args:
+        spec: The model.
+        joint: The joint's name.
+        model: ``spec`` compiled before any edit, to read the gains MuJoCo computed (``dampratio``);
+            None reads the spec's numbers.
+    """
     import mujoco
 
     found = []
@@ -101,13 +155,71 @@ def joint_actuators(spec: mujoco.MjSpec, joint: str) -> list[ExistingActuator]:
             mujoco.mjtTrn.mjTRN_JOINTINPARENT,
         ):
             continue
-        kind, kp, kv = _kind(spec, actuator)
+        kind, kp, kv = _kind(spec, actuator, model, index)
         found.append(
             ExistingActuator(
                 index=index, name=actuator.name or f"#{index}", kind=kind, stiffness=kp, damping=kv
             )
         )
     return found
+
+
+def primary_actuator(found: list[ExistingActuator]) -> ExistingActuator:
+    """The actuator that becomes the drive: the first with gains, else the first.
+
+    A drive comes before a position or velocity actuator; a motor beside a position actuator then
+    does not take its place (it has no gains to keep).
+    """
+    for kinds in (("drive",), ("position", "velocity")):
+        for actuator in found:
+            if actuator.kind in kinds:
+                return actuator
+    return found[0]
+
+
+def feed_forward_motor(found: list[ExistingActuator], primary: ExistingActuator) -> ExistingActuator | None:
+    """A motor after ``primary`` on the same joint that can become the drive's ``ff`` input, or None.
+
+    Its control is an effort before and after (now counted inside the envelope), so it keeps its
+    name, slot and keyframe values. It must come after the drive's actuator: the plugin gives a
+    joint's actuators to the inputs in order of appearance.
+    """
+    if primary.kind not in ("position", "velocity"):
+        return None
+    for actuator in found:
+        if actuator.kind == "motor" and actuator.index > primary.index:
+            return actuator
+    return None
+
+
+def convert_channel(spec: mujoco.MjSpec, index: int, *, instance: str) -> bool:
+    """Turn motor ``index`` into a zero-force input channel of ``instance`` in place (keeps its name).
+
+    Returns:
+        False (nothing changed) if it cannot carry a joint-side effort: a gear other than 1 or
+        activation dynamics.
+    """
+    import mujoco
+
+    actuator = spec.actuators[index]
+    gear = list(actuator.gear)
+    if gear[0] != 1 or any(gear[1:]) or actuator.dyntype != mujoco.mjtDyn.mjDYN_NONE:
+        return False
+    ctrlrange, limited = [float(v) for v in actuator.ctrlrange], actuator.ctrllimited
+    actuator.classname = spec.default
+    actuator.plugin.plugin_name = PLUGIN_NAME
+    actuator.plugin.name = instance
+    actuator.plugin.active = True
+    actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    actuator.gainprm = [1.0] + [0.0] * 9
+    actuator.biastype = mujoco.mjtBias.mjBIAS_NONE
+    actuator.biasprm = [0.0] * 10
+    actuator.dynprm = [1.0] + [0.0] * 9
+    actuator.actdim = -1
+    actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    actuator.forcerange = [0.0, 0.0]
+    actuator.ctrllimited, actuator.ctrlrange = limited, ctrlrange
+    return True
 
 
 def _joint_range(spec: mujoco.MjSpec, joint: str) -> tuple[float, float] | None:
@@ -125,9 +237,26 @@ def _joint_range(spec: mujoco.MjSpec, joint: str) -> tuple[float, float] | None:
 
 
 def convert_actuator(
-    spec: mujoco.MjSpec, index: int, *, name: str, instance: str, dynprm: list[float], where: str
+    spec: mujoco.MjSpec,
+    index: int,
+    *,
+    name: str,
+    instance: str,
+    dynprm: list[float],
+    where: str,
+    model: mujoco.MjModel | None = None,
 ) -> None:
     """Turn actuator ``index`` into the effort actuator of a drive on its joint, in place.
+
+    Args:
+        spec: The model, edited in place.
+        index: The actuator's position in ``spec.actuators``.
+        name: The drive's name.
+        instance: The plugin instance.
+        dynprm: The drive's numbers.
+        where: Start of error messages.
+        model: ``spec`` compiled before any edit: its control range is the one kept (an
+            ``inheritrange`` range exists only there), None: the spec's.
 
     Raises:
         InputError: a gear other than 1 (the drive works on the joint side).
@@ -135,7 +264,7 @@ def convert_actuator(
     import mujoco
 
     actuator = spec.actuators[index]
-    kind, _, _ = _kind(spec, actuator)
+    kind, _, _ = _kind(spec, actuator, model, index)
     gear = list(actuator.gear)
     if gear[0] != 1 or any(gear[1:]):
         raise InputError(
@@ -150,6 +279,15 @@ def convert_actuator(
         )
     ctrlrange = [float(v) for v in actuator.ctrlrange]
     limited = actuator.ctrllimited
+    i = compiled_id(model, actuator, index)
+    if model is not None and i >= 0:
+        # the range MuJoCo uses: inheritrange and autolimits resolved
+        ctrlrange = [float(v) for v in model.actuator_ctrlrange[i]]
+        limited = (
+            mujoco.mjtLimited.mjLIMITED_TRUE
+            if bool(model.actuator_ctrllimited[i])
+            else mujoco.mjtLimited.mjLIMITED_FALSE
+        )
     if kind == "motor":
         # its control was a force; now it is a target position: the joint's range, if any
         joint_range = _joint_range(spec, actuator.target)
@@ -173,6 +311,7 @@ def convert_actuator(
     actuator.forcerange = [0.0, 0.0]
     actuator.ctrllimited = limited
     actuator.ctrlrange = ctrlrange
+    actuator.inheritrange = 0.0  # the range is explicit now (a class's inheritrange must not redo it)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -201,6 +340,10 @@ def update_keyframes(spec: mujoco.MjSpec, model: mujoco.MjModel | None, plan: Ke
 
     for key in spec.keys:
         ctrl = [float(v) for v in key.ctrl]
+        if not ctrl and plan.count and (plan.hold or any(name == "pos" for _, name in plan.appended)):
+            # MuJoCo reads a key without ctrl as zeros; where a zero changes meaning (a motor's
+            # torque becomes a target position) write the key's controls out
+            ctrl = [0.0] * plan.count
         if len(ctrl) != plan.count:
             continue  # no ctrl in this key (MuJoCo uses the defaults) or already inconsistent
         qpos = [float(v) for v in key.qpos]

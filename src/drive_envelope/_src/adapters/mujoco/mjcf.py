@@ -25,7 +25,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from drive_envelope._src.adapters.mujoco.existing import joint_actuators
+from drive_envelope._src.adapters.mujoco.existing import (
+    describe_kind,
+    feed_forward_motor,
+    joint_actuators,
+    primary_actuator,
+)
+from drive_envelope._src.adapters.mujoco.ratings import Rating, joint_ratings
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import input_file
@@ -80,6 +86,11 @@ class EquippedJoint:
     """What it replaced, e.g. ``"position 'actuator1'"``, or ``""``."""
     gains_from: str
     """Where the gains came from: the replaced actuator, or the arguments."""
+    where: str = ""
+    """The map key or flag the envelope came from (reports group joints by it)."""
+    rating: Rating | None = None
+    """The model's own effort rating of the joint before the edit
+    (:mod:`~drive_envelope._src.adapters.mujoco.ratings`); None if the model did not compile."""
 
 
 def load_spec(path: str | os.PathLike[str]) -> mujoco.MjSpec:
@@ -198,29 +209,35 @@ def apply_drives(
     from drive_envelope._src.adapters.mujoco.spec import add_drive
 
     joints = driven_joints(spec)
-    done = []
     for item in assignments:
         if item.joint not in joints:
-            import difflib
-
-            close = difflib.get_close_matches(item.joint, joints, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise InputError(
                 f"{item.where or item.joint}: the model has no hinge or slide joint named "
-                f"{item.joint!r}{hint}"
+                f"{item.joint!r}{_nearest_joints(item.joint, joints)}"
             )
-        existing = joint_actuators(spec, item.joint)
-        first = existing[0] if existing else None
+    # the gains, control ranges and ratings MuJoCo compiles (dampratio, inheritrange, classes)
+    before = _compile_quietly(spec)
+    ratings = joint_ratings(before, [item.joint for item in assignments]) if before is not None else {}
+    done = []
+    for item in assignments:
+        existing = joint_actuators(spec, item.joint, before)
+        first = primary_actuator(existing) if existing else None
         inputs: tuple[str, ...] = ("pos",)
         if first is not None and first.kind == "velocity":
             inputs = ("vel",)
         elif first is not None and first.kind == "drive":
             actuator: Any = spec.actuators[first.index]
             inputs = _inputs_of_instance(spec, actuator.plugin.name)
+        if first is not None and feed_forward_motor(existing, first) is not None:
+            inputs += ("ff",)  # the motor beside it keeps its slot as the drive's feed-forward
         k = stiffness if stiffness is not None else (first.stiffness if first else None)
         c = damping if damping is not None else (first.damping if first else None)
         if k is None or c is None:
-            what = f"its actuator {first.name!r} is a {first.kind}" if first else "it has no actuator"
+            what = (
+                f"its actuator {first.name!r} is {describe_kind(first.kind)}"
+                if first
+                else "it has no actuator"
+            )
             missing = [flag for flag, value in (("--stiffness", k), ("--damping", c)) if value is None]
             flags = [f for f, v in (("--stiffness", stiffness), ("--damping", damping)) if v is not None]
             ask = " and ".join(missing) + (f" too ({flags[0]} is given)" if flags else "")
@@ -231,18 +248,25 @@ def apply_drives(
         if first is not None:
             _warn_tighter_force_range(spec, spec.actuators[first.index], first.name, item)
         try:
-            drive = add_drive(
-                spec,
-                item.joint,
-                envelope=item.envelope,
-                stiffness=k,
-                damping=c,
-                inputs=inputs,
-                effort_sensor=False,
-                replace=True,
-            )
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                drive = add_drive(
+                    spec,
+                    item.joint,
+                    envelope=item.envelope,
+                    stiffness=k,
+                    damping=c,
+                    inputs=inputs,
+                    effort_sensor=False,
+                    replace=True,
+                )
         except InputError as exc:
             raise _at(item, exc) from None
+        for warning in caught:  # add_drive's own said with the map key (or flag) in front, as errors are
+            message = str(warning.message)
+            if message.startswith("add_drive("):
+                message = str(_at(item, InputError(message)))
+            warnings.warn(message, stacklevel=2)
         given = "given" if stiffness is not None and damping is not None else ""
         source = given or (f"{first.kind} {first.name!r}" if first else "given")
         done.append(
@@ -255,9 +279,31 @@ def apply_drives(
                 damping=drive.damping,
                 replaced=f"{first.kind} {first.name!r}" if first else "",
                 gains_from=source,
+                where=item.where or item.joint,
+                rating=ratings.get(item.joint),
             )
         )
     return done
+
+
+def _nearest_joints(name: str, joints: Sequence[str]) -> str:
+    """`` (did you mean 'a', 'b'?)``: joints containing ``name`` (any case), else difflib's closest."""
+    import difflib
+
+    lowered = name.lower()
+    close = [j for j in joints if lowered and lowered in j.lower()][:3]
+    close = close or difflib.get_close_matches(name, list(joints), n=3, cutoff=0.5)
+    return f" (did you mean {', '.join(repr(j) for j in close)}?)" if close else ""
+
+
+def _compile_quietly(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
+    """``spec`` compiled as it is (None if it does not compile: the spec's own numbers are read)."""
+    try:
+        with warnings.catch_warnings(), mujoco_warnings():
+            warnings.simplefilter("ignore")  # the result's compile gives the warnings that matter
+            return spec.copy().compile()
+    except ValueError:
+        return None
 
 
 def _warn_tighter_force_range(spec: mujoco.MjSpec, actuator: Any, name: str, item: Assignment) -> None:

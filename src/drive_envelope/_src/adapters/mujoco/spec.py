@@ -16,13 +16,17 @@ together anyway, and one instance costs MuJoCo least.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.adapters.mujoco.existing import (
     KeyPlan,
     convert_actuator,
+    convert_channel,
+    feed_forward_motor,
     joint_actuators,
+    primary_actuator,
     update_keyframes,
 )
 from drive_envelope._src.adapters.mujoco.handle import MjDrive
@@ -225,7 +229,10 @@ def add_drives(
             )
     dynprm = drive_dynprm(env, stiffness=k, damping=c, where=where)
     channels = _read_inputs(inputs)
-    existing = {joint: joint_actuators(spec, joint) for joint in joints}
+    # the model as MuJoCo compiles it before the edit: dampratio gains, inheritrange control ranges
+    # and the joints' qpos addresses for keyframes exist only there
+    before = _compiled(spec) if replace and len(spec.actuators) else None
+    existing = {joint: joint_actuators(spec, joint, before) for joint in joints}
     for joint, found in existing.items():
         if found and not replace:
             first = found[0]
@@ -237,24 +244,50 @@ def add_drives(
     instance_name = instance or default_instance(drive_type, channels)
     _ensure_instance(spec, instance_name, plugin_config(drive_type=drive_type, inputs=channels), where)
 
-    # the joints' qpos addresses, for keyframes whose controls change meaning
-    before = _compiled(spec) if replace and len(spec.keys) and any(existing.values()) else None
     plan = KeyPlan(count=len(spec.actuators), deleted=set(), hold={}, appended=[])
     drives = []
     for joint, given in zip(joints, labels, strict=True):
         found = existing[joint]
-        drive_name = given or (found[0].name if found and not found[0].name.startswith("#") else joint)
+        primary = primary_actuator(found) if found else None
+        drive_name = given or (primary.name if primary and not primary.name.startswith("#") else joint)
         actuators = tuple(drive_name if i == 0 else f"{drive_name}_{n}" for i, n in enumerate(channels))
+        # a motor beside the PD actuator becomes the 'ff' input in place (same slot, still an effort)
+        motor = feed_forward_motor(found, primary) if primary and channels[1:] == ("ff",) else None
+        if motor is not None and not convert_channel(spec, motor.index, instance=instance_name):
+            motor = None
+        if motor is not None:
+            actuators = (actuators[0], motor.name)
         _check_free_names(spec, actuators, {a.index for a in found}, where)
         start = 0
-        if found:
+        if primary is not None:
             convert_actuator(
-                spec, found[0].index, name=actuators[0], instance=instance_name, dynprm=dynprm, where=where
+                spec,
+                primary.index,
+                name=actuators[0],
+                instance=instance_name,
+                dynprm=dynprm,
+                where=where,
+                model=before,
             )
-            if found[0].kind in ("motor", "velocity") or channels[0] != "pos":
-                plan.hold[found[0].index] = joint if channels[0] == "pos" else ""
-            plan.deleted.update(a.index for a in found[1:])
-            start = 1
+            if primary.kind in ("motor", "velocity") or channels[0] != "pos":
+                plan.hold[primary.index] = joint if channels[0] == "pos" else ""
+            gone = [a for a in found if a is not primary and a is not motor]
+            plan.deleted.update(a.index for a in gone)
+            if gone:
+                dropped = {a.index for a in gone}
+                later = sum(1 for i in range(min(dropped) + 1, plan.count) if i not in dropped)
+                shift = (
+                    f"; the {later} actuator(s) after them move down {len(gone)} control slot(s)"
+                    if later > 0
+                    else ""
+                )
+                warnings.warn(
+                    f"add_drive(joint={joint!r}): actuator(s) "
+                    f"{', '.join(f'{a.name!r} ({a.kind})' for a in gone)} deleted: the drive replaces "
+                    f"{primary.name!r} and their force would bypass the envelope{shift}",
+                    stacklevel=3,
+                )
+            start = 2 if motor is not None else 1
         for i, actuator_name in enumerate(actuators[start:], start):
             actuator = spec.add_actuator(name=actuator_name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
             actuator.plugin.plugin_name = PLUGIN_NAME

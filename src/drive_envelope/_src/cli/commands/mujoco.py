@@ -137,11 +137,14 @@ def _apply(args: argparse.Namespace) -> int:
         done = apply_drives(spec, assignments, stiffness=args.stiffness, damping=args.damping)
         model = write_mjcf(spec, args.output, source=args.model, force=args.force)
     drives = model_drives(model)
-    # the plugin warns once per process and per joint; say it once per actuator, from the result
+    # the plugin warns once per process and per joint; say it once per actuator, from the result,
+    # and an actuatorfrcrange only where it can bind, once per map key (_report)
     for message in dict.fromkeys(str(w.message) for w in caught):
-        if not is_bypass_warning(message):
+        if not is_bypass_warning(message) and not _is_frcrange_warning(message):
             warn(message)
     for message in bypass_warnings(other_actuators(model, drives)):
+        warn(message)
+    for message in _report(done, model):
         warn(message)
     for item in done:
         replaced = f"replaces {item.replaced}" if item.replaced else "new actuator"
@@ -151,6 +154,30 @@ def _apply(args: argparse.Namespace) -> int:
         )
     status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(drives)} drives)")
     return 0
+
+
+def _is_frcrange_warning(message: str) -> bool:
+    """Whether ``message`` is the plugin's note that a driven joint has an ``actuatorfrcrange``."""
+    return message.startswith("drive_envelope.envelope: joint ") and "has an actuatorfrcrange" in message
+
+
+def _report(done: list[Any], model: Any) -> list[str]:
+    """Caps below the model's own rating, actuatorfrcranges that bind, equalities between drives."""
+    from drive_envelope._src.adapters.mujoco.ratings import (
+        binding_force_ranges,
+        coupled_driven_joints,
+        rating_lines,
+    )
+
+    groups: dict[str, list[tuple[str, float, str]]] = {}
+    for item in done:
+        groups.setdefault(item.where, []).append((item.joint, item.envelope.max_effort, item.envelope.joint))
+    ratings = {item.joint: item.rating for item in done if item.rating is not None}
+    return (
+        binding_force_ranges(groups, ratings)
+        + rating_lines(groups, ratings)
+        + coupled_driven_joints(model, [item.joint for item in done])
+    )
 
 
 def _summary(envelope: Any, stiffness: float, damping: float) -> str:

@@ -1,0 +1,225 @@
+"""``mujoco apply`` on models as Menagerie writes them (issue 23, items 2-6; issue 25, item 6).
+
+Golden values are by hand: a ``position`` actuator with ``dampratio="1"`` on a hinge whose body has
+inertia 0.04 kg*m^2 about the axis (nothing else moves) has kv = 2 * sqrt(kp * 0.04) = 4 for
+kp = 100, as MuJoCo's compiler defines dampratio; ``inheritrange="1"`` makes the control range the
+joint's range. The AK80-6 from the catalog has max_effort 12 N*m, the G1 map's ankles 35 N*m
+against the Menagerie G1's actuatorfrcrange 50 N*m: (50 - 35) / 50 = 30 %.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from _mujoco_plugin import mujoco_with_plugin
+from drive_envelope import InputError
+
+pytestmark = pytest.mark.mujoco
+
+MENAGERIE = Path(__file__).resolve().parents[2] / "shared" / "data" / "menagerie"
+
+BODY = '<body pos="{x} 0 0"><joint name="{name}" axis="0 1 0" range="-1 1.5"/>' \
+    '<inertial pos="0 0 0" mass="1" diaginertia="0.04 0.04 0.04"/></body>'  # fmt: skip
+
+
+def _model(tmp_path: Path, actuators: str, *, joints: tuple[str, ...] = ("a", "b"), extra: str = "") -> Path:
+    bodies = "".join(BODY.format(x=i, name=name) for i, name in enumerate(joints))
+    text = (
+        f"<mujoco><compiler angle='radian'/><option timestep='0.002'/><worldbody>{bodies}</worldbody>"
+        f"{extra}<actuator>{actuators}</actuator></mujoco>"
+    )
+    path = tmp_path / "robot.xml"
+    path.write_text(text.replace("'", '"'), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def mujoco() -> Any:
+    return mujoco_with_plugin()
+
+
+def _cli(*argv: str) -> int:
+    from drive_envelope._src.cli.commands import mujoco as command
+
+    parser = argparse.ArgumentParser(prog="drive-envelope")
+    command.register(parser.add_subparsers())
+    args = parser.parse_args(argv)
+    return int(args.func(args))
+
+
+def _apply(model: Path, out: Path, *flags: str) -> int:
+    return _cli("mujoco", "apply", str(model), *flags, "-o", str(out))
+
+
+def test_dampratio_gains_and_inherited_control_ranges_are_kept(mujoco: Any, tmp_path: Path) -> None:
+    """kv comes from the compiled dampratio (4 N*m*s/rad), the control range from inheritrange."""
+    model = _model(
+        tmp_path,
+        '<position name="pa" joint="a" kp="100" dampratio="1" inheritrange="1"/>',
+        joints=("a",),
+    )
+    out = tmp_path / "out.xml"
+    assert _apply(model, out, "--joint", "a", "--datasheet", "tmotor-ak80-6") == 0
+    from drive_envelope._src.adapters.mujoco.params import model_drives
+
+    result = mujoco.MjModel.from_xml_path(str(out))
+    (drive,) = model_drives(result)
+    assert drive.stiffness == 100.0
+    assert drive.damping == pytest.approx(4.0, rel=1e-12)
+    np.testing.assert_array_equal(result.actuator_ctrlrange[0], [-1.0, 1.5])
+    assert result.actuator_ctrllimited[0]
+
+
+def test_a_keyframe_without_ctrl_holds_its_position_where_a_motor_becomes_a_drive(
+    mujoco: Any, tmp_path: Path
+) -> None:
+    """H1's case: the key has qpos only; the motor's 0 N*m becomes a target of the key's 0.7 rad."""
+    model = _model(
+        tmp_path,
+        '<motor name="ma" joint="a"/><position name="pb" joint="b" kp="10"/>',
+        extra='<keyframe><key name="home" qpos="0.7 0.2"/></keyframe>',
+    )
+    out = tmp_path / "out.xml"
+    flags = ("--joint", "a", "--datasheet", "tmotor-ak80-6", "--stiffness", "50", "--damping", "2")
+    assert _apply(model, out, *flags) == 0
+    result = mujoco.MjModel.from_xml_path(str(out))
+    # the drive targets the key's position; the untouched position actuator keeps MuJoCo's 0
+    np.testing.assert_array_equal(result.key_ctrl[0], [0.7, 0.0])
+
+
+def test_a_motor_beside_a_position_actuator_becomes_its_feed_forward(mujoco: Any, tmp_path: Path) -> None:
+    """Issue 25 item 6: nothing deleted, every control slot stays, the motor's key torque too."""
+    model = _model(
+        tmp_path,
+        '<position name="pa" joint="a" kp="50" kv="2" ctrlrange="-1 1"/><motor name="ma" joint="a"'
+        ' ctrlrange="-3 3"/><position name="pb" joint="b" kp="20"/>',
+        extra='<keyframe><key name="k" qpos="0.5 0.25" ctrl="0.4 1.5 0.2"/></keyframe>',
+    )
+    out = tmp_path / "out.xml"
+    assert _apply(model, out, "--joint", "a", "--datasheet", "tmotor-ak80-6") == 0
+    from drive_envelope._src.adapters.mujoco.params import model_drives
+
+    result = mujoco.MjModel.from_xml_path(str(out))
+    names = [mujoco.mj_id2name(result, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(result.nu)]
+    assert names == ["pa", "ma", "pb"]
+    (drive,) = model_drives(result)
+    assert drive.inputs == ("pos", "ff")
+    np.testing.assert_array_equal(result.key_ctrl[0], [0.4, 1.5, 0.2])
+    np.testing.assert_array_equal(result.actuator_ctrlrange[1], [-3.0, 3.0])
+
+
+def test_a_motor_before_the_position_actuator_is_deleted_with_a_warning(
+    mujoco: Any, tmp_path: Path, capsys: Any
+) -> None:
+    """The position actuator (with the gains) is kept; the deleted motor and the slot shift are said."""
+    model = _model(
+        tmp_path,
+        '<motor name="ma" joint="a"/><position name="pa" joint="a" kp="50" kv="2"/>'
+        '<position name="pb" joint="b" kp="20"/>',
+        extra='<keyframe><key name="k" qpos="0.5 0.25" ctrl="0.4 1.5 0.2"/></keyframe>',
+    )
+    out = tmp_path / "out.xml"
+    assert _apply(model, out, "--joint", "a", "--datasheet", "tmotor-ak80-6") == 0
+    err = capsys.readouterr().err
+    assert (
+        "--joint: joint 'a': actuator(s) 'ma' (motor) deleted: the drive replaces 'pa' and their force "
+        "would bypass the envelope; the 2 actuator(s) after them move down 1 control slot(s)"
+    ) in err
+    result = mujoco.MjModel.from_xml_path(str(out))
+    names = [mujoco.mj_id2name(result, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(result.nu)]
+    assert names == ["pa", "pb"]
+    np.testing.assert_array_equal(result.key_ctrl[0], [1.5, 0.2])
+
+
+def test_caps_below_the_model_rating_and_binding_frcranges_are_reported_once(
+    mujoco: Any, tmp_path: Path, capsys: Any
+) -> None:
+    """A motor's ctrlrange 40 N*m is the model's rating (12 is 70 % below); an actuatorfrcrange of 8
+    binds under the 12 N*m cap; one of 12.5 cannot bind and says nothing."""
+    model = _model(
+        tmp_path,
+        '<motor name="ma" joint="a" ctrlrange="-40 40"/><motor name="mb" joint="b"/>',
+        joints=("a", "b", "c"),
+    )
+    text = model.read_text(encoding="utf-8")
+    text = text.replace('name="b" axis="0 1 0"', 'name="b" actuatorfrcrange="-8 8" axis="0 1 0"')
+    text = text.replace('name="c" axis="0 1 0"', 'name="c" actuatorfrcrange="-12.5 12.5" axis="0 1 0"')
+    model.write_text(text, encoding="utf-8")
+    for joint in ("a", "b", "c"):
+        flags = ("--joint", joint, "--datasheet", "tmotor-ak80-6", "--stiffness", "5", "--damping", "1")
+        assert _apply(model, tmp_path / f"{joint}.xml", *flags) == 0
+        err = capsys.readouterr().err
+        if joint == "a":
+            assert (
+                "--joint: max_effort 12 N*m is 70 % below the model's own rating, 40 N*m (ctrlrange of "
+                "motor 'ma') on a: the drive caps these joints at 12 N*m"
+            ) in err
+        elif joint == "b":
+            assert "--joint: actuatorfrcrange 8 N*m on b is below the envelope's max_effort 12 N*m" in err
+            assert "has an actuatorfrcrange" not in err and err.count("warning") == 1  # not the plugin's too
+        else:
+            assert "warning" not in err
+
+
+def test_an_equality_between_driven_joints_is_a_warning(mujoco: Any, tmp_path: Path) -> None:
+    """Its constraint force acts beside the drives: said once, naming both joints."""
+    from drive_envelope._src.adapters.mujoco.ratings import coupled_driven_joints
+
+    model = _model(
+        tmp_path,
+        '<position name="pa" joint="a" kp="50" kv="2"/><position name="pb" joint="b" kp="50" kv="2"/>',
+        extra='<equality><joint name="tie" joint1="a" joint2="b"/></equality>',
+    )
+    compiled = mujoco.MjModel.from_xml_path(str(model))
+    (line,) = coupled_driven_joints(compiled, ["a", "b"])
+    assert line.startswith("equality 'tie' couples driven joint(s) 'a' and 'b': its constraint force")
+    assert coupled_driven_joints(compiled, ["a"]) == []
+
+
+def test_wording_of_an_actuator_without_gains_and_of_a_near_joint_name(mujoco: Any, tmp_path: Path) -> None:
+    """No "is a other"; ``--joint elbo`` suggests the joints whose names contain it."""
+    model = _model(
+        tmp_path,
+        '<general name="g" joint="left_elbow_joint" gaintype="affine" gainprm="1 2"/>',
+        joints=("left_elbow_joint", "right_elbow_joint"),
+    )
+    out = tmp_path / "out.xml"
+    with pytest.raises(InputError, match=r"its actuator 'g' is neither a motor nor a PD actuator"):
+        _apply(model, out, "--joint", "left_elbow_joint", "--datasheet", "tmotor-ak80-6")
+    near = "(did you mean 'left_elbow_joint', 'right_elbow_joint'?)"
+    with pytest.raises(InputError, match=re.escape(near)):
+        _apply(model, out, "--joint", "elbo", "--datasheet", "tmotor-ak80-6")
+
+
+def test_menagerie_g1_with_the_shipped_map(mujoco: Any, tmp_path: Path, capsys: Any) -> None:
+    """The done-when case: a working model, its control ranges, every cap below the model's said."""
+    scene = MENAGERIE / "unitree_g1" / "scene.xml"
+    if not scene.is_file():
+        pytest.skip(f"needs {scene} (../shared/data/menagerie, not part of a user's clone)")
+    out = tmp_path / "g1.xml"
+    assert _apply(scene, out, "--map", "unitree-g1") == 0
+    err = capsys.readouterr().err
+    from drive_envelope._src.adapters.mujoco.params import model_drives
+
+    original = mujoco.MjModel.from_xml_path(str(scene))
+    result = mujoco.MjModel.from_xml_path(str(out))
+    assert len(model_drives(result)) == 29
+    np.testing.assert_array_equal(result.actuator_ctrlrange, original.actuator_ctrlrange)
+    assert result.actuator_ctrllimited.all()
+    lines = [line for line in err.splitlines() if "warning" in line]
+    below = [line for line in lines if "% below the model's own rating, 50 N*m (actuatorfrcrange)" in line]
+    assert len(below) == 4 and all("max_effort 35 N*m is 30 % below" in line for line in below)
+    assert len(lines) == 4  # no actuatorfrcrange that cannot bind, no hip line (139 = 139)
+    # it stands: the key's pose held for 2 s under the drives (pelvis height stays near 0.79 m)
+    data = mujoco.MjData(result)
+    mujoco.mj_resetDataKeyframe(result, data, 0)
+    for _ in range(1000):
+        mujoco.mj_step(result, data)
+    assert math.isfinite(data.qpos[2]) and abs(data.qpos[2] - 0.79) < 0.03
