@@ -9,9 +9,14 @@ whether it was fixed, the identified envelope and stand scenario, and each log's
 position error (also in PhysX or MuJoCo with ``engine=``). :func:`identification_to_dict` gives the
 ``--json`` object and :func:`save_identification_figure` the figure.
 
-Logs: :func:`read_bench_log` (CSV or Parquet: ``time``, ``position``, ``target_position``, optional
-``velocity``, ``effort``, ``target_velocity``, ``torque_enable``). The stand file is a scenario
-with a ``[pendulum]`` table and the optional ``[servo]`` and ``[bounds]`` tables
+The search runs ``restarts`` times (each parameter's ``spread`` over them is its seed
+uncertainty) and reports the envelope in canonical form (a line that never binds is moved to where
+it binds, with a note). :func:`save_stand` writes the identified stand (``result.stand``) and
+:func:`replay_logs` replays logs through a stand file (``drive-envelope replay``).
+
+Logs: :func:`read_bench_log` (CSV, Parquet or a ROS 2 bag: ``time``, ``position``,
+``target_position``, optional ``velocity``, ``effort``, ``target_velocity``, ``torque_enable``).
+The stand file is a scenario with a ``[pendulum]`` table and the optional ``[servo]`` and ``[bounds]`` tables
 (:func:`read_stand`). SI throughout. Needs SciPy (``pip install 'drive-envelope[identify]'``),
 imported when the search runs; the figure needs matplotlib.
 """
@@ -19,12 +24,14 @@ imported when the search runs; the figure needs matplotlib.
 from __future__ import annotations
 
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
-from drive_envelope._src.identify.optimize import SearchOptions, SearchResult
+from drive_envelope._src.identify.optimize import SearchOptions, SearchProgress, SearchResult
 from drive_envelope._src.identify.parameters import DEFAULT_FIT, PARAMETERS
+from drive_envelope._src.identify.playback import Playback, replay_logs
 from drive_envelope._src.identify.plot import identification_figure, save_identification_figure
 from drive_envelope._src.identify.report import identification_text, identification_to_dict
 from drive_envelope._src.identify.run import Estimate, Identification, LogError, identify
 from drive_envelope._src.identify.stand import IdentifyStand, read_stand
+from drive_envelope._src.identify.stand_file import save_stand
 
 __all__ = [
     "DEFAULT_FIT",
@@ -34,7 +41,9 @@ __all__ = [
     "Identification",
     "IdentifyStand",
     "LogError",
+    "Playback",
     "SearchOptions",
+    "SearchProgress",
     "SearchResult",
     "identification_figure",
     "identification_text",
@@ -42,5 +51,7 @@ __all__ = [
     "identify",
     "read_bench_log",
     "read_stand",
+    "replay_logs",
     "save_identification_figure",
+    "save_stand",
 ]
