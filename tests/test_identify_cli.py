@@ -269,6 +269,7 @@ def test_a_sidecar_copied_from_another_log_is_a_warning(
     _sidecar(logs[0], name="2026-01-15_10h30m10", kp_duty_per_rad=2.3, mass_kg=0.49, length_m=0.1)
     err = _warnings(main, ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort"], capsys)
     assert f"{logs[0]}: its sidecar names the log '2026-01-15_10h30m10': a sidecar copied" in err
+    assert "(its kp_duty_per_rad is used as it is; the pendulum is the stand's)" in err
 
 
 def test_a_sidecar_bench_that_differs_from_the_stand_is_a_warning(
@@ -278,6 +279,7 @@ def test_a_sidecar_bench_that_differs_from_the_stand_is_a_warning(
     _sidecar(logs[0], name="run0", mass_kg=1.5, length_m=0.1)  # the stand says 0.49 kg at 0.1 m
     err = _warnings(main, ["identify", str(logs[0]), "--stand", str(stand), "--fit", "max_effort"], capsys)
     assert "its sidecar gives mass_kg = 1.5 but" in err and "has pendulum.mass = 0.49" in err
+    assert "the replay uses the stand's 0.49" in err  # what is used, said as it is (issue 26, item 5)
     assert "length_m" not in err
 
 
