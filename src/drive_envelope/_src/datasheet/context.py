@@ -39,6 +39,9 @@ class DeriveContext:
     """k_t [N*m/A or N/A], given or the SI reciprocal of k_v."""
     speed_constant: float | None = None
     """k_v [(rad/s)/V or (m/s)/V], given, from k_e, or the SI reciprocal of k_t."""
+    curve_gradient: float | None = None
+    """Delta v / Delta tau at the joint [(rad/s)/(N*m) or (m/s)/N] of ``losses.operating_points``
+    that are the speed-torque line (eq. 2); None when they are not (or there are none)."""
     notes: list[str] = field(default_factory=list)
     """Defaults used and values derived, in plain words."""
     provenance: dict[str, ParamSource] = field(default_factory=dict)

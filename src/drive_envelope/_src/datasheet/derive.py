@@ -86,8 +86,9 @@ def derive(
     velocity = velocity_candidates(ctx)
     effort_by = binding(effort, "max_effort", ctx, EFFORT_HINT)
     velocity_by = binding(velocity, "max_actuator_velocity", ctx, VELOCITY_HINT)
-    gradient, gradient_method_used, reason = choose_gradient(ctx, method, explicit, velocity_by)
+    # the operating points first: when they are the speed-torque line, its slope is a gradient source
     resistance_value, resistance_method = resistance(ctx)
+    gradient, gradient_method_used, reason = choose_gradient(ctx, method, explicit, velocity_by)
     max_effort = value_of(effort, effort_by)
     max_velocity = value_of(velocity, velocity_by)
     envelope = PerformanceEnvelope(

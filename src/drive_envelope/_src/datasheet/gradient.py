@@ -92,7 +92,21 @@ def _not_needed(ctx: DeriveContext, method: str, explicit: bool, why: str) -> No
         ctx.notes.append(f"gradient method {method!r} not needed: {why}, so the motor's gradient is not used")
 
 
+def _from_curve(ctx: DeriveContext, why: str) -> tuple[float, str, str]:
+    """The gradient of ``losses.operating_points`` that are the speed-torque line."""
+    assert ctx.curve_gradient is not None
+    _check_gradient(ctx, ctx.curve_gradient, "the operating points' line", "losses.operating_points")
+    ctx.provenance["speed_effort_gradient"] = "derived"
+    return (
+        ctx.curve_gradient,
+        "operating_points",
+        f"{why}: the slope of losses.operating_points, which are the speed-torque line (eq. 2)",
+    )
+
+
 def _output_gradient(ctx: DeriveContext, found: tuple[float, str] | None, key: str) -> tuple[float, str, str]:
+    if found is None and ctx.curve_gradient is not None:
+        return _from_curve(ctx, f"the output's {key} binds without a printed gradient")
     if found is None:
         ctx.provenance["speed_effort_gradient"] = "default"
         if key == "max_velocity":
@@ -148,6 +162,8 @@ def _voltage_gradient(ctx: DeriveContext, method: str, explicit: bool) -> tuple[
             "output_rating",
             f"the voltage limit binds but no motor gradient: output's {found[1]}",
         )
+    if ctx.curve_gradient is not None:
+        return _from_curve(ctx, "the voltage limit binds but no motor gradient")
     ctx.provenance["speed_effort_gradient"] = "default"
     ctx.notes.append(
         "speed_effort_gradient = 0: the voltage limit binds but no motor gradient can be formed "

@@ -101,11 +101,14 @@ def _fitted(ctx: DeriveContext, points: tuple[tuple[float, float], ...]) -> tupl
     reaches_zero = slope < 0.0 and -intercept / slope <= _REACH * float(np.max(speeds))
     if no_load or reaches_zero:
         zero_at = float(speeds[np.argmin(efforts)]) if no_load else -intercept / slope
+        if slope < 0.0:
+            # either slope may carry the line, both cannot be 0: it gives speed_effort_gradient
+            ctx.curve_gradient = -1.0 / slope
         ctx.notes.append(
             f"losses.operating_points fall to zero effort at {zero_at:.6g} {speed_unit} (a no-load speed): "
-            "they are the speed-torque line of eq. 2 (its slope is speed_effort_gradient), "
-            "not speed-dependent "
-            "losses, so velocity_dependent_resistance = 0"
+            "they are the speed-torque line of eq. 2 (its slope gives speed_effort_gradient, "
+            f"{-1.0 / slope if slope < 0.0 else 0.0:.6g} {ctx.units['joint_gradient']}, unless the datasheet "
+            "gives one), not speed-dependent losses, so velocity_dependent_resistance = 0"
         )
         return 0.0, "speed_torque_line"
     if slope > 0.0:
