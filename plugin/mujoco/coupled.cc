@@ -175,6 +175,10 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   moved_.assign(n, 0);
   shift_.assign(n, 0);
   bias_.assign(n, 0);
+  adiag_.assign(n, 0);
+  h_.assign(m->nC, 0);
+  hdinv_.assign(m->nv, 0);
+  delta_.assign(m->nv, 0);
   bias_force_.assign(m->nv, 0);
   warned_.assign(drives_.size() + 2, 0);
 }
@@ -335,6 +339,25 @@ void CoupledSolver::Response(const mjModel* m, const mjData* d) {
       }
     }
   }
+
+  // the diagonal now (each row's response, the same sums in the same order as FullResponse's);
+  // the whole block only when a drive is outside its envelope (FullResponse)
+  for (int r = 0; r < n; r++) adiag_[r] = 0;
+  for (size_t t = 0; t < dofs_.size(); t++) {
+    int k = dofs_[t];
+    const double* z = zd + member_adr_[k];
+    const int* rows = member_row_.data() + member_adr_[k];
+    for (int i = 0; i < member_num_[k]; i++) adiag_[rows[i]] += z[i] * dinv[k] * z[i];
+  }
+  full_ = false;
+}
+
+void CoupledSolver::FullResponse(const mjData* d) {
+  if (full_) return;
+  full_ = true;
+  const mjtNum* dinv = d->qLDiagInv;
+  const double* zd = zd_.data();
+  int n = nrow_;
   for (int i = 0; i < n * n; i++) a_[i] = 0;
   for (size_t t = 0; t < dofs_.size(); t++) {
     int k = dofs_[t];
@@ -396,6 +419,7 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
       Prepare(d, dt);
       sweeps = Sweep(m, d, dt);
     } else {
+      FullResponse(d);
       if (setting.kind == SolverKind::kTgs) BiasVelocity(m, d, dt);
       sweeps = Articulation(d, dt, setting);
     }

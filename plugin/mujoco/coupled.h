@@ -82,11 +82,12 @@ class CoupledSolver {
   void SmoothVelocity(const mjModel* m, mjData* d, double dt);
   void ImplicitDamping(const mjModel* m, const mjData* d, double dt);
   void Response(const mjModel* m, const mjData* d);
+  void FullResponse(const mjData* d);
   void FreeVelocity(double dt, const mjData* d);
   void HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const;
   void RowsOf(const mjData* d, const mjtNum* half, double* out) const;
   void Prepare(const mjData* d, double dt);
-  void LinearGuess();
+  void LinearGuess(const mjModel* m, const mjData* d);
   RowResult RowSolve(int r, double rest, double dt, const mjData* d);
   void Track(int r, const RowResult& result);
   void Velocities();
@@ -128,6 +129,9 @@ class CoupledSolver {
   std::vector<double> rest_, slope_;
   std::vector<RowResult> result_;
   std::vector<ImplicitDriveDesc> desc_;  // per row, the step's drive law (pgs/tgs)
+  std::vector<double> adiag_;            // per row, A_rr (Response; a_ only after FullResponse)
+  bool full_ = false;                    // a_ holds this step's A
+  std::vector<mjtNum> h_, hdinv_, delta_;  // the linear guess's sparse factor and solution
   std::vector<double> moved_;            // per row, displacement since the step began (tgs)
   std::vector<double> shift_;            // per row, PhysX's position minus MuJoCo's [rad or m]
   bool shift_pending_ = false;

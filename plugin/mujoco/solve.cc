@@ -89,7 +89,7 @@ void CoupledSolver::Prepare(const mjData* d, double dt) {
   int n = nrow_;
   for (int r = 0; r < n; r++) {
     double hd = dt * damp_[r];
-    double response = a_[r * n + r];
+    double response = adiag_[r];
     double reff = response / (1 + response * hd);
     double c = hd * qvel_[r], alpha = hd;
     int k = rows_[r].drive;
@@ -113,35 +113,69 @@ void CoupledSolver::Prepare(const mjData* d, double dt) {
   }
 }
 
-void CoupledSolver::LinearGuess() {
-  // the solve's starting point: every row's unclamped law at once, (diag(1/alpha) + A) w = c/alpha
-  // - vfree (rows with alpha ~ 0 keep w = c); Newton and the sweeps then clamp and correct it, so
-  // a failed factorization only costs iterations: it falls back to one Jacobi step from vfree
-  int n = nrow_;
-  free_.clear();
-  fixed_.clear();
+void CoupledSolver::LinearGuess(const mjModel* m, const mjData* d) {
+  // the solve's starting point: every row's unclamped law w = c - alpha*v1 at once. With
+  // v1 = vfree + M^-1 P' w that is (M + P' diag(alpha) P) dv = P' (c - alpha*vfree), v1 = vfree + dv
+  // at the rows: M's own sparsity (the tree), factored as MuJoCo factors M (mj_factorI), so no
+  // block of M^-1 is needed. Newton and the sweeps then clamp and correct it, so a failed
+  // factorization only costs iterations: it falls back to one Jacobi step from vfree
+  int n = nrow_, nv = m->nv;
+  mjtNum* h = h_.data();
+  mjtNum* x = delta_.data();
+  for (int i = 0; i < m->nC; i++) h[i] = d->M[i];
+  for (int i = 0; i < nv; i++) x[i] = 0;
   for (int r = 0; r < n; r++) {
-    w_[r] = lin_c_[r];
-    (lin_alpha_[r] * a_[r * n + r] > 1e-12 ? free_ : fixed_).push_back(r);
+    int dof = rows_[r].dof;
+    h[m->M_rowadr[dof] + m->M_rownnz[dof] - 1] += lin_alpha_[r];
+    x[dof] = lin_c_[r] - lin_alpha_[r] * vfree_[r];
   }
-  int m = static_cast<int>(free_.size());
-  if (m) {
-    for (int i = 0; i < m; i++) {
-      int r = free_[i];
-      double rhs = lin_c_[r] / lin_alpha_[r] - vfree_[r];
-      for (int s : fixed_) rhs -= a_[r * n + s] * lin_c_[s];
-      rhs_[i] = rhs;
-      for (int j = 0; j < m; j++) q_[i * m + j] = a_[r * n + free_[j]];
-      q_[i * m + i] += 1 / lin_alpha_[r];
+  bool factored = true;
+  for (int k = nv - 1; k >= 0 && factored; k--) {  // h = L'*D*L in place, D^-1 apart
+    int start = m->M_rowadr[k], diag = m->M_rownnz[k] - 1, end = start + diag;
+    factored = h[end] > mjMINVAL && std::isfinite(h[end]);
+    double inverse = factored ? 1 / h[end] : 0;
+    hdinv_[k] = inverse;
+    for (int adr = end - 1; adr >= start; adr--) {
+      int i = m->M_colind[adr];
+      double scale = -h[adr] * inverse;
+      for (int j = 0, row = m->M_rowadr[i]; j < m->M_rownnz[i]; j++) h[row + j] += h[start + j] * scale;
     }
-    if (CholeskySolve(q_.data(), rhs_.data(), m)) {
-      for (int i = 0; i < m; i++) w_[free_[i]] = rhs_[i];
-    } else {
-      for (int r = 0; r < n; r++) w_[r] = lin_c_[r] - lin_alpha_[r] * vfree_[r];
+    for (int adr = start; adr < end; adr++) h[adr] *= inverse;
+  }
+  if (factored) {
+    for (int k = nv - 1; k > 0; k--) {  // L'^-1
+      double xk = x[k];
+      if (xk == 0) continue;
+      for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+        x[m->M_colind[adr]] -= h[adr] * xk;
+      }
+    }
+    for (int k = 0; k < nv; k++) x[k] *= hdinv_[k];  // D^-1
+    for (int k = 0; k < nv; k++) {  // L^-1
+      double sum = 0;
+      for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+        sum += h[adr] * x[m->M_colind[adr]];
+      }
+      x[k] -= sum;
     }
   }
   for (int r = 0; r < n; r++) {
-    if (!std::isfinite(w_[r])) w_[r] = 0;
+    double v1 = vfree_[r] + (factored ? x[rows_[r].dof] : 0);
+    w_[r] = lin_c_[r] - lin_alpha_[r] * v1;
+    v_[r] = v1;
+    if (!std::isfinite(w_[r]) || !std::isfinite(v1)) {
+      w_[r] = 0;
+      v_[r] = vfree_[r];  // a row set to 0 no longer moves the others: they are recomputed below
+      factored = false;
+    }
+  }
+  if (!factored) {
+    for (int r = 0; r < n; r++) {
+      w_[r] = std::isfinite(w_[r]) ? w_[r] : 0;
+    }
+    FullResponse(d);
+    for (int r = 0; r < n; r++) x_[r] = w_[r], y_[r] = 0;
+    Velocities();
   }
 }
 
@@ -279,12 +313,7 @@ int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
 
   // split the starting impulses into drive and damping parts at their predicted velocities; a
   // drive whose unclamped impulse is inside its envelope is done unless another row moves it
-  LinearGuess();
-  for (int r = 0; r < n; r++) {
-    x_[r] = w_[r];
-    y_[r] = 0;
-  }
-  Velocities();
+  LinearGuess(m, d);
   bool any = false;
   for (int r = 0; r < n; r++) {
     double v1 = v_[r];
@@ -298,6 +327,7 @@ int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
     if (drive) effort_[k] = x_[r] / dt;
   }
   if (!any) return 0;
+  FullResponse(d);
 
   // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
   int iterations = 0;
