@@ -169,8 +169,9 @@ def _print_table(runs: dict[str, list[dict[str, object]]], shipped: dict[str, di
         else:
             label = f"BAM {name.split()[1].upper()} fitted here ({args.bam_trials} trials)"
         median = {
-            key: statistics.median(float(item[key]) for item in items) for key in ("train", "holdout", "wall")
-        }  # type: ignore[arg-type]
+            key: statistics.median(float(item[key]) for item in items)  # type: ignore[arg-type]
+            for key in ("train", "holdout", "wall")
+        }
         spread = statistics.median(float(item["holdout_std"]) for item in items)  # type: ignore[arg-type]
         rounds = " ".join(f"{float(item['holdout']):.1f}" for item in items)  # type: ignore[arg-type]
         print(f"{label:44s} {median['train']:7.1f} {median['holdout']:8.1f} {spread:6.1f} "
@@ -197,10 +198,10 @@ def _print_seed_study(items: list[dict[str, object]]) -> None:
         values = [float(item["values"][name]) for item in items if name in item["values"]]  # type: ignore[index, operator]
         if values:
             print(f"  {name:30s} " + " ".join(f"{value:.4g}" for value in values))
-    binds = [item["binds"] for item in items]
-    print("  every reported line binds: " + ", ".join(
-        "yes" if all(b.values()) else f"no ({b})" for b in binds  # type: ignore[union-attr]
-    ))  # fmt: skip
+    binds = [dict(item["binds"]) for item in items]  # type: ignore[call-overload]
+    print(
+        "  every reported line binds: " + ", ".join("yes" if all(b.values()) else f"no ({b})" for b in binds)
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

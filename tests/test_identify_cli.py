@@ -99,7 +99,8 @@ def test_json_object_has_the_issue_keys(
     out = tmp_path / "identified.toml"
     envelope_file = tmp_path / "envelope.toml"
     argv = ["identify", str(logs[0]), "--stand", str(stand), "--validate", str(logs[1]), "--fit", FIT,
-            "--json", "-o", str(out), "--envelope-output", str(envelope_file), "--generations", "20"]  # fmt: skip
+            "--json", "-o", str(out), "--envelope-output", str(envelope_file),
+            "--generations", "20"]  # fmt: skip
     assert main(argv) == 0
     captured = capsys.readouterr()
     data = json.loads(captured.out)
