@@ -1,7 +1,7 @@
 // Copyright 2026 The drive-envelope authors. BSD-3-Clause.
 //
-// The coupled solve proper: the linear solve of the unclamped laws, Newton steps on the drives'
-// own solves, Gauss-Seidel sweeps (see coupled.h and README.md, "Control law").
+// The coupled solve proper: the linear solve of the unclamped laws (sparse, on M's tree), Newton
+// steps on the drives' own solves, Gauss-Seidel sweeps (see coupled.h and README.md, "Control law").
 
 #include <algorithm>
 #include <cmath>
@@ -25,32 +25,6 @@ bool Inside(const DriveParams& p, double dt, double x, double v) {
                    xmax - p.velocity_dependent_resistance * dt * av - ax > kMargin * xmax;
   bool speed_ok = std::isinf(vmax) || vmax - p.speed_effort_gradient / dt * ax - av > kMargin * vmax;
   return effort_ok && speed_ok;
-}
-
-// solves q*x = b in place (b becomes x) for a symmetric positive definite m x m row-major q,
-// by a right-looking Cholesky factorization (its updates are independent); false if q is not
-// positive definite
-bool CholeskySolve(double* q, double* b, int m) {
-  for (int k = 0; k < m; k++) {
-    double pivot = q[k * m + k];
-    if (!(pivot > mjMINVAL) || !std::isfinite(pivot)) return false;
-    double inverse = 1 / std::sqrt(pivot);
-    q[k * m + k] = inverse;  // the diagonal keeps 1/L_kk
-    for (int i = k + 1; i < m; i++) q[i * m + k] *= inverse;
-    for (int i = k + 1; i < m; i++) {
-      double lik = q[i * m + k];
-      for (int j = k + 1; j <= i; j++) q[i * m + j] -= lik * q[j * m + k];
-    }
-  }
-  for (int i = 0; i < m; i++) {  // L*y = b
-    for (int j = 0; j < i; j++) b[i] -= q[i * m + j] * b[j];
-    b[i] *= q[i * m + i];
-  }
-  for (int i = m - 1; i >= 0; i--) {  // L'*x = y
-    b[i] *= q[i * m + i];
-    for (int j = 0; j < i; j++) b[j] -= q[i * m + j] * b[i];
-  }
-  return true;
 }
 
 // solves a*x = b in place (b becomes x) for a general n x n row-major a, by Gaussian elimination
