@@ -51,3 +51,72 @@ def test_a_printed_gradient_still_wins_over_the_points() -> None:
         }
     )
     assert result.envelope.speed_effort_gradient == 0.5
+
+
+@pytest.mark.parametrize(
+    ("text", "unit", "expected"),
+    [
+        ("3.3 [N.m]", "N*m", 3.3),  # ROBOTIS e-Manual
+        ("31 [rev/min]", "rad/s", 31 * RPM),
+        ("30 Kg.cm", "N*m", 30 * 9.80665 * 0.01),  # kilogram-force centimetres
+        ("16 N-cm", "N*m", 0.16),
+        ("DC24V", "V", 24.0),  # Harmonic Drive
+        ("10 Amps", "A", 10.0),  # Magmotor
+        ("100 rpm/Volt", "rad/s/V", 100 * RPM),
+        ("0.05 Vs/rad", "V*s/rad", 0.05),
+    ],
+)
+def test_vendor_spellings_are_read(text: str, unit: str, expected: float) -> None:
+    """Item 10: each spelling names exactly one unit, so it is read, not refused."""
+    from drive_envelope._src.units import to_si
+
+    assert to_si(text, unit, "k") == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_tolerance_reads_the_nominal_and_says_so() -> None:
+    """Item 10: '46 RPM ±10%' is 46 rpm, and the tolerance is named in a warning."""
+    from drive_envelope._src.units import to_si
+
+    with pytest.warns(
+        UserWarning, match=r"k: '46 RPM ±10%': read the nominal '46 RPM'; its tolerance of ±10 %"
+    ):
+        assert to_si("46 RPM ±10%", "rad/s", "k") == pytest.approx(46 * RPM, rel=1e-12)
+
+
+def _warnings(motor: dict[str, Any], controller: dict[str, Any]) -> tuple[str, ...]:
+    data = {"name": "m", "joint": "revolute", "motor": motor, "controller": controller}
+    return tuple(_derive(data).warnings)
+
+
+def test_a_torque_constant_per_arms_with_a_peak_current_is_a_warning() -> None:
+    """Item 8: RobStride's own table, 1.22 N.m/Arms and 23Apk; one convention each, no warning."""
+    (line,) = _warnings({"torque_constant": "1.22 N.m/Arms"}, {"max_current": "23Apk", "max_voltage": "48 V"})
+    assert "torque_constant is per A rms but controller.max_current is marked peak" in line
+    assert "too high by sqrt(2)" in line
+    assert (
+        _warnings({"torque_constant": "1.22 N.m/Arms"}, {"max_current": "16 Arms", "max_voltage": "48 V"})
+        == ()
+    )
+    assert (
+        _warnings({"torque_constant": "1.22 N*m/A"}, {"max_current": "23 Apk", "max_voltage": "48 V"}) == ()
+    )
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "bound"),
+    [
+        ("terminal_resistance", "1000 MΩ", "1e+09 ohm"),  # typed for mΩ
+        ("torque_constant", "91 N*m/A", None),  # plausible (a large motor): no warning
+        ("torque_constant", "910 N*m/A", "910 N*m/A"),  # mNm/A typed as N*m/A
+    ],
+)
+def test_motor_constants_beyond_any_motor_are_a_warning(key: str, value: str, bound: str | None) -> None:
+    """Item 9: a 1e9 ohm winding makes the gradient 1e9x; it is named, with the bounds."""
+    found = [w for w in _warnings({key: value, "torque_constant": "0.1 N*m/A"} if key != "torque_constant"
+                                  else {key: value}, {"max_current": "10 A", "max_voltage": "24 V"})
+             if "is outside what motors have" in w]  # fmt: skip
+    if bound is None:
+        assert found == []
+    else:
+        (line,) = found
+        assert f"motor.{key} = {bound} is outside what motors have" in line

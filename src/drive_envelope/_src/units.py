@@ -50,6 +50,10 @@ _SPELLINGS: tuple[tuple[str, str], ...] = (
     (r"³", "^3"),
     (r"[·⋅•]", "*"),
     (r"\b([kMm]?)(?:Ohms?|ohms)\b", r"\1ohm"),
+    # words and run-together symbols of one unit each: "10 Amps", "rpm/Volt", "Vs/rad"
+    (r"\b(m?)(?:Amps?|amps?|Amperes?|amperes?)\b", r"\1A"),
+    (r"\b(m?)(?:Volts?|volts?)\b", r"\1V"),
+    (r"\bVs\b", "(V*s)"),
     # rms / peak markers on amperes and volts: the unit is the ampere (volt); conventions are the user's
     (r"\b([Am]?A)\s*\(?\s*(?:rms|RMS|pk|PK|peak)\s*\)?(?![A-Za-z])", r"\1"),
     (r"\b([mk]?V)\s*\(?\s*(?:rms|RMS|pk|PK|peak)\s*\)?(?![A-Za-z])", r"\1"),
@@ -63,9 +67,9 @@ _SPELLINGS: tuple[tuple[str, str], ...] = (
     (r"\bm(Nm|N\.m|N-m)\b", "(mN*m)"),
     (r"\bNmm\b", "(N*mm)"),
     (r"\b(Nm|N\.m|N-m)\b", "(N*m)"),
-    (r"\bNcm\b", "(N*cm)"),
+    (r"\bN\s*[-.]?\s*cm\b", "(N*cm)"),
     # kilogram-force lengths (a servo's "kg.cm"); not kg*cm^2, an inertia
-    (r"\bkgf?\s*[-*.]?\s*(cm|mm)\b(?!\s*\^)", r"(kgf*\1)"),
+    (r"\b[kK][gG]f?\s*[-*.]?\s*(cm|mm)\b(?!\s*\^)", r"(kgf*\1)"),
     (r"\b(?:ozf?\s*[-*.]?\s*in|in\s*[-*.]?\s*ozf?)\b", "(ozf*in)"),
     (r"\b(?:lbf?\s*[-*.]?\s*in|in\s*[-*.]?\s*lbf?)\b", "(lbf*in)"),
     (r"\b(?:lbf?\s*[-*.]?\s*ft|ft\s*[-*.]?\s*lbf?)\b", "(lbf*ft)"),
@@ -180,9 +184,32 @@ def _refuse_comma(text: str, where: str) -> None:
     )
 
 
+# "46 RPM ±10%", "24 V +/- 5 %": the nominal is read, the tolerance said (a warning)
+_TOLERANCE = re.compile(r"\s*(?:±|\+/-|\+-)\s*(\d+\.?\d*|\.\d+)\s*%\s*$")
+# "DC24V": a supply voltage with its kind in front
+_DC_PREFIX = re.compile(r"^\s*(?:DC|dc)\s*(?=[-+]?[\d.])")
+
+
+def _without_tolerance(text: str, where: str) -> str:
+    """``text`` without a trailing ``±N %`` tolerance, which is said in a warning (the nominal is read)."""
+    import warnings
+
+    match = _TOLERANCE.search(text)
+    if match is None:
+        return text
+    nominal = text[: match.start()].strip()
+    warnings.warn(
+        f"{where}: {text.strip()!r}: read the nominal {nominal!r}; its tolerance of ±{match.group(1)} % "
+        "is not modelled (a unit with this spread differs by that much)",
+        stacklevel=4,
+    )
+    return nominal
+
+
 def _parse(text: str, where: str) -> tuple[pint.Quantity | None, float]:
     """Parse a quantity string: ``(quantity, magnitude)``; the quantity is None for a bare number (SI)."""
     ureg = get_registry()
+    text = _DC_PREFIX.sub("", _without_tolerance(text, where))
     servo = _SERVO_SPEED.match(text)
     if servo is not None:
         seconds, degrees = float(servo.group(1)), float(servo.group(2))
@@ -195,6 +222,10 @@ def _parse(text: str, where: str) -> tuple[pint.Quantity | None, float]:
             f"{where}: cannot read {text!r} as a number with a unit (e.g. '3000 rpm', '0.091 N*m/A')"
         )
     number, unit_text = match.group(1), match.group(2)
+    # ROBOTIS prints units in brackets: "3.3 [N.m]", "31 [rev/min]"
+    bracketed = re.fullmatch(r"\[\s*([^\[\]]+?)\s*\]", unit_text)
+    if bracketed is not None:
+        unit_text = bracketed.group(1)
     magnitude = float(number)
     if math.isinf(magnitude) and "inf" not in number.lower():
         raise UnitsError(f"{where}: {text!r} is beyond the float range (about 1.8e308)")

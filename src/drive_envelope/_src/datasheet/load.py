@@ -192,7 +192,26 @@ def datasheet_from_mapping(
         source=source,
         provenance=provenance,
         notes=tuple(notes),
+        current_conventions=_current_conventions(merged),
     )
+
+
+_RMS = re.compile(r"A\s*\(?\s*(?:rms|RMS)\b")
+_PEAK = re.compile(r"A\s*\(?\s*(?:pk|PK|peak)\b")
+
+
+def _current_conventions(merged: Mapping[str, Any]) -> dict[str, str]:
+    """Which current-carrying values were marked rms or peak in their text (see ``Datasheet``)."""
+    found = {}
+    for section, key in (("motor", "torque_constant"), ("controller", "max_current")):
+        table = merged.get(section)
+        raw = table.get(key) if isinstance(table, Mapping) else None
+        if isinstance(raw, str):
+            if _RMS.search(raw):
+                found[f"{section}.{key}"] = "rms"
+            elif _PEAK.search(raw):
+                found[f"{section}.{key}"] = "peak"
+    return found
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -435,9 +454,18 @@ def _read_enum(raw: object, where: str) -> str:
     return str(raw)
 
 
+MAX_OPERATING_POINTS = 10_000
+"""Most ``operating_points`` read: a digitized curve has tens to hundreds; each costs a unit conversion."""
+
+
 def _read_points(raw: object, units: dict[str, str], where: str) -> tuple[tuple[float, float], ...]:
     if not isinstance(raw, (list, tuple)):
         raise InputError(f"{where}: expected a list of [speed, torque] pairs, got {raw!r}")
+    if len(raw) > MAX_OPERATING_POINTS:
+        raise InputError(
+            f"{where}: {len(raw)} points; expected at most {MAX_OPERATING_POINTS} (a digitized curve "
+            "needs tens; thin the points out, or fit a measured sweep with `drive-envelope fit`)"
+        )
     points = []
     for index, pair in enumerate(raw):
         if not isinstance(pair, (list, tuple)) or len(pair) != 2:

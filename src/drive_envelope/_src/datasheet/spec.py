@@ -215,6 +215,10 @@ class Datasheet:
     """``"section.key"`` -> ``"datasheet"`` or ``"user"`` (set with an override) for each value given."""
     notes: tuple[str, ...] = ()
     """How the file was read where it could be read two ways (e.g. a ratio written ``"1:50"``)."""
+    current_conventions: Mapping[str, str] = field(default_factory=dict)
+    """``"motor.torque_constant"`` or ``"controller.max_current"`` -> ``"rms"`` or ``"peak"``, as the
+    value's text marked it (``"1.22 N.m/Arms"``, ``"23Apk"``); the units layer reads both as plain
+    amperes, so a derivation checks that they match."""
 
     @property
     def linear_motor(self) -> bool:
