@@ -89,6 +89,6 @@ def _current_conventions(ctx: DeriveContext) -> list[str]:
     fix = "I_rms = I_pk / sqrt(2)" if kt == "rms" else "I_pk = I_rms * sqrt(2)"
     return [
         f"{ctx.sheet.source}: motor.torque_constant is per A {kt} but controller.max_current is marked "
-        f"{current}: both are read as plain amperes, so the controller_current limit is {factor} for a sinusoidal "
-        f"current; write max_current in the torque constant's convention ({fix})"
+        f"{current}: both are read as plain amperes, so the controller_current limit is {factor} for a "
+        f"sinusoidal current; write max_current in the torque constant's convention ({fix})"
     ]
