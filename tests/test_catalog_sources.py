@@ -49,46 +49,94 @@ GO2 = "go2_description/urdf/go2_description.urdf"
 H1 = "h1_description/urdf/h1.urdf"
 
 TRANSCRIPTION: dict[str, Element] = {
-    "unitree-g1-4010": urdf(G1, "left_wrist_pitch_joint",
-                            '<limit effort="5" velocity="22" lower="-1.614429558" upper="1.614429558"/>'),
-    "unitree-g1-5020": urdf(G1, "left_shoulder_pitch_joint",
-                            '<limit lower="-3.0892" upper="2.6704" effort="25" velocity="37"/>'),
-    "unitree-g1-7520-14": urdf(G1, "left_hip_pitch_joint",
-                               '<limit lower="-2.5307" upper="2.8798" effort="88" velocity="32"/>'),
-    "unitree-g1-7520-22": urdf(G1, "left_knee_joint",
-                               '<limit lower="-0.087267" upper="2.8798" effort="139" velocity="20"/>'),
-    "unitree-g1-ankle": urdf(G1, "left_ankle_pitch_joint",
-                             '<limit lower="-0.87267" upper="0.5236" effort="35" velocity="30"/>'),
-    "unitree-go-m8010-6": urdf(GO2, "FL_hip_joint",
-                               '<limit lower="-1.0472" upper="1.0472" effort="23.7" velocity="30.1" />'),
-    "unitree-go2-calf": urdf(GO2, "FL_calf_joint",
-                             '<limit lower="-2.7227" upper="-0.83776" effort="45.43" velocity="15.70" />'),
-    "unitree-h1-ankle": urdf(H1, "left_ankle_joint", '<limit lower="-0.87" upper="0.52" effort="40" velocity="9"/>'),
-    "unitree-h1-arm": urdf(H1, "left_elbow_joint", '<limit lower="-1.25" upper="2.61" effort="18" velocity="20"/>'),
-    "unitree-h1-hip": urdf(H1, "left_hip_pitch_joint",
-                           '<limit lower="-3.14" upper="2.53" effort="200" velocity="23"/>'),
-    "unitree-h1-knee": urdf(H1, "left_knee_joint", '<limit lower="-0.26" upper="2.05" effort="300" velocity="14"/>'),
-    "unitree-a1-motor": Element(UNITREE + "a1_description/xacro/const.xacro", "hip_torque_max",
-                                '<xacro:property name="hip_velocity_max" value="21"/> '
-                                '<xacro:property name="hip_torque_max" value="33.5"/>'),
-    "unitree-go1-joint": Element(UNITREE + "go1_description/xacro/const.xacro", "hip_torque_max",
-                                 '<xacro:property name="hip_velocity_max" value="30.1"/> '
-                                 '<xacro:property name="hip_torque_max" value="23.7"/>'),
+    "unitree-g1-4010": urdf(
+        G1,
+        "left_wrist_pitch_joint",
+        '<limit effort="5" velocity="22" lower="-1.614429558" upper="1.614429558"/>',
+    ),
+    "unitree-g1-5020": urdf(
+        G1, "left_shoulder_pitch_joint", '<limit lower="-3.0892" upper="2.6704" effort="25" velocity="37"/>'
+    ),
+    "unitree-g1-7520-14": urdf(
+        G1, "left_hip_pitch_joint", '<limit lower="-2.5307" upper="2.8798" effort="88" velocity="32"/>'
+    ),
+    "unitree-g1-7520-22": urdf(
+        G1, "left_knee_joint", '<limit lower="-0.087267" upper="2.8798" effort="139" velocity="20"/>'
+    ),
+    "unitree-g1-ankle": urdf(
+        G1, "left_ankle_pitch_joint", '<limit lower="-0.87267" upper="0.5236" effort="35" velocity="30"/>'
+    ),
+    "unitree-go-m8010-6": urdf(
+        GO2, "FL_hip_joint", '<limit lower="-1.0472" upper="1.0472" effort="23.7" velocity="30.1" />'
+    ),
+    "unitree-go2-calf": urdf(
+        GO2, "FL_calf_joint", '<limit lower="-2.7227" upper="-0.83776" effort="45.43" velocity="15.70" />'
+    ),
+    "unitree-h1-ankle": urdf(
+        H1, "left_ankle_joint", '<limit lower="-0.87" upper="0.52" effort="40" velocity="9"/>'
+    ),
+    "unitree-h1-arm": urdf(
+        H1, "left_elbow_joint", '<limit lower="-1.25" upper="2.61" effort="18" velocity="20"/>'
+    ),
+    "unitree-h1-hip": urdf(
+        H1, "left_hip_pitch_joint", '<limit lower="-3.14" upper="2.53" effort="200" velocity="23"/>'
+    ),
+    "unitree-h1-knee": urdf(
+        H1, "left_knee_joint", '<limit lower="-0.26" upper="2.05" effort="300" velocity="14"/>'
+    ),
+    "unitree-a1-motor": Element(
+        UNITREE + "a1_description/xacro/const.xacro",
+        "hip_torque_max",
+        '<xacro:property name="hip_velocity_max" value="21"/> '
+        '<xacro:property name="hip_torque_max" value="33.5"/>',
+    ),
+    "unitree-go1-joint": Element(
+        UNITREE + "go1_description/xacro/const.xacro",
+        "hip_torque_max",
+        '<xacro:property name="hip_velocity_max" value="30.1"/> '
+        '<xacro:property name="hip_torque_max" value="23.7"/>',
+    ),
     # ROBOTIS: the bold (recommended-voltage) entry of each multi-voltage line, or the one at 12 V
-    "dynamixel-xl330-m077": dxl("xl330-m077", "0.215 [N.m] (at 5.0 [V], 1.47 [A])", "383 [rev/min] (at 5.0 [V])"),
-    "dynamixel-xl330-m288": dxl("xl330-m288", "0.52 [N.m] (at 5.0 [V], 1.47 [A])", "103 [rev/min] (at 5.0 [V])"),
-    "dynamixel-xc330-m288": dxl("xc330-m288", "0.93 [N.m] (at 5.0 [V], 1.80 [A])", "81 [rev/min] (at 5.0 [V])"),
-    "dynamixel-xl430-w250": dxl("xl430-w250", "1.4 [N.m] (at 11.1 [V], 1.3 [A])", "57 [rev/min] (at 11.1 [V])"),
-    "dynamixel-xc430-w240": dxl("xc430-w240", "1.9 [N.m] (at 12.0 [V], 1.4 [A])", "70 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xm430-w210": dxl("xm430-w210", "3.0 [N.m] (at 12.0 [V], 2.3 [A])", "77 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xm430-w350": dxl("xm430-w350", "4.1 [N.m] (at 12.0 [V], 2.3 [A])", "46 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xh430-w350": dxl("xh430-w350", "3.4 [N.m] (at 12.0 [V], 1.3 [A])", "30 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xh540-w150": dxl("xh540-w150", "7.1 [N.m] (at 12.0 [V], 4.9 [A])", "70 [rev/min]) (at 12.0 [V])"),
-    "dynamixel-xh540-w270": dxl("xh540-w270", "9.9 [N.m] (at 12.0 [V], 4.9 [A])", "39 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xw540-t260": dxl("xw540-t260", "9.5 [N.m] (at 12.0 [V], 4.9 [A])", "40 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xm540-w150": dxl("xm540-w150", "7.3 [N.m] (at 12.0 [V], 4.4 [A])", "53 [rev/min] (at 12.0 [V])"),
-    "dynamixel-xm540-w270": dxl("xm540-w270", "10.6 [N.m] (at 12.0 [V], 4.4 [A])", "30 [rev/min] (at 12.0 [V])"),
-}  # fmt: skip
+    "dynamixel-xl330-m077": dxl(
+        "xl330-m077", "0.215 [N.m] (at 5.0 [V], 1.47 [A])", "383 [rev/min] (at 5.0 [V])"
+    ),
+    "dynamixel-xl330-m288": dxl(
+        "xl330-m288", "0.52 [N.m] (at 5.0 [V], 1.47 [A])", "103 [rev/min] (at 5.0 [V])"
+    ),
+    "dynamixel-xc330-m288": dxl(
+        "xc330-m288", "0.93 [N.m] (at 5.0 [V], 1.80 [A])", "81 [rev/min] (at 5.0 [V])"
+    ),
+    "dynamixel-xl430-w250": dxl(
+        "xl430-w250", "1.4 [N.m] (at 11.1 [V], 1.3 [A])", "57 [rev/min] (at 11.1 [V])"
+    ),
+    "dynamixel-xc430-w240": dxl(
+        "xc430-w240", "1.9 [N.m] (at 12.0 [V], 1.4 [A])", "70 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xm430-w210": dxl(
+        "xm430-w210", "3.0 [N.m] (at 12.0 [V], 2.3 [A])", "77 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xm430-w350": dxl(
+        "xm430-w350", "4.1 [N.m] (at 12.0 [V], 2.3 [A])", "46 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xh430-w350": dxl(
+        "xh430-w350", "3.4 [N.m] (at 12.0 [V], 1.3 [A])", "30 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xh540-w150": dxl(
+        "xh540-w150", "7.1 [N.m] (at 12.0 [V], 4.9 [A])", "70 [rev/min]) (at 12.0 [V])"
+    ),
+    "dynamixel-xh540-w270": dxl(
+        "xh540-w270", "9.9 [N.m] (at 12.0 [V], 4.9 [A])", "39 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xw540-t260": dxl(
+        "xw540-t260", "9.5 [N.m] (at 12.0 [V], 4.9 [A])", "40 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xm540-w150": dxl(
+        "xm540-w150", "7.3 [N.m] (at 12.0 [V], 4.4 [A])", "53 [rev/min] (at 12.0 [V])"
+    ),
+    "dynamixel-xm540-w270": dxl(
+        "xm540-w270", "10.6 [N.m] (at 12.0 [V], 4.4 [A])", "30 [rev/min] (at 12.0 [V])"
+    ),
+}
 
 
 NOT_TRANSCRIBED = {
