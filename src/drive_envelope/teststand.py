@@ -7,6 +7,11 @@ as CSV, JSON or Parquet. A run of more than ``max_steps`` steps (:data:`MAX_STEP
 refused before it starts. The ``reference`` engine is a float64 NumPy model of the PhysX articulation solver
 (PGS and TGS); ``mujoco`` and ``physx`` need their extras.
 
+A multi-DOF stand: a file with a ``[[joints]]`` list is a :class:`ChainScenario` (a fixed-base
+chain or tree of driven links under gravity; ``load_stand`` reads either kind), run by the
+``reference`` engine (PhysX's articulation solver: Gauss-Seidel drive rows root to leaf) and
+``physx``, giving a :class:`ChainTrajectory`.
+
 A bench's loads: :class:`PendulumSpec` (a point mass pulled by gravity), :class:`FrictionSpec`
 (PhysX 5.6 joint friction: static, dynamic, viscous) and ``JointSpec.armature``; a
 :class:`DriveSchedule` replays per-step drive targets and power states (``simulate(..., schedule=)``).
@@ -14,6 +19,14 @@ A bench's loads: :class:`PendulumSpec` (a point mass pulled by gravity), :class:
 
 from __future__ import annotations
 
+from drive_envelope._src.scenario.chain import (
+    ChainJoint,
+    ChainScenario,
+    chain_from_scenario,
+    load_chain_scenario,
+    load_stand,
+)
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory, save_chain_trajectory
 from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec, PendulumSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import (
@@ -38,6 +51,9 @@ __all__ = [
     "ENGINES",
     "MAX_STEPS",
     "STANDARD_GRAVITY",
+    "ChainJoint",
+    "ChainScenario",
+    "ChainTrajectory",
     "DriveSchedule",
     "DriveSpec",
     "FrictionSpec",
@@ -47,9 +63,13 @@ __all__ = [
     "Scenario",
     "SimulationSpec",
     "Trajectory",
+    "chain_from_scenario",
     "engine_names",
+    "load_chain_scenario",
     "load_scenario",
+    "load_stand",
     "read_trajectory",
+    "save_chain_trajectory",
     "save_trajectory",
     "scenario_from_mapping",
     "simulate",

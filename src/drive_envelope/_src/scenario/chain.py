@@ -15,16 +15,31 @@ axis, a pendulum's point mass, gravity in the joint's plane).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.checks import check_finite
-from drive_envelope._src.scenario.loads import FrictionSpec
+from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec
 from drive_envelope._src.scenario.spec import DriveSpec, LoadSpec, Scenario, SimulationSpec
 
-__all__ = ["AXES", "ChainJoint", "ChainScenario", "Vector3", "chain_from_scenario"]
+__all__ = [
+    "AXES",
+    "ChainJoint",
+    "ChainScenario",
+    "Vector3",
+    "chain_from_mapping",
+    "chain_from_scenario",
+    "is_chain_mapping",
+    "load_chain_scenario",
+    "load_stand",
+]
 
 Vector3 = tuple[float, float, float]
 AXES = ("x", "y", "z")
@@ -170,13 +185,11 @@ def chain_from_scenario(scenario: Scenario) -> ChainScenario:
     """The one-joint scenario as a chain of one.
 
     The joint turns about (or slides along) Z; the link carries the scenario's inertia about its
-    centre of mass, which is on the axis without a ``[pendulum]`` and, with one, the point mass
-    ``distance`` from the axis, hanging along -X... at ``-angle_offset``: gravity then acts along
-    -X's world counterpart in the joint's plane. A constant ``load.external_effort`` stays a joint
-    effort. With no pendulum the chain's gravity is 0, as on the one-joint stand.
+    centre of mass, which is on the axis without a ``[pendulum]`` (and the chain has no gravity, as
+    on the one-joint stand). With a pendulum the joint turns about Y and the link's centre of mass
+    is the point mass, ``distance`` from the axis, hanging straight down (-Z, along gravity) at
+    ``position = -angle_offset``: gravity's effort is then ``-m*g*d*sin(position + angle_offset)``.
     """
-    import dataclasses
-
     joint = scenario.joint
     pendulum = scenario.pendulum
     revolute = joint.type == "revolute"
@@ -210,3 +223,167 @@ def chain_from_scenario(scenario: Scenario) -> ChainScenario:
     return ChainScenario(
         joints=(single,), simulation=simulation, name=scenario.name, description=scenario.description
     )
+
+
+# -- reading ----------------------------------------------------------------------------------------
+
+_TOP_KEYS = ("name", "description", "simulation", "joints")
+_JOINT_KEYS = (
+    "name", "type", "axis", "parent", "origin", "mass", "com", "inertia", "armature",
+    "initial_position", "initial_velocity", "drive", "envelope", "load", "friction",
+)  # fmt: skip
+
+
+def is_chain_mapping(data: Mapping[str, Any]) -> bool:
+    """Whether a parsed scenario file describes a chain (it has ``[[joints]]``)."""
+    return "joints" in data
+
+
+def load_chain_scenario(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> ChainScenario:
+    """Read a chain scenario file (TOML, JSON or YAML); ``--set simulation.key=value`` overrides apply.
+
+    Raises:
+        InputError: one line naming the file, the key, the value and what was expected.
+    """
+    from drive_envelope._src.io.files import read_mapping
+    from drive_envelope._src.scenario.overrides import apply_overrides
+
+    file = Path(path)
+    data = apply_overrides(read_mapping(file), overrides)
+    return chain_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+
+
+def chain_from_mapping(
+    data: Mapping[str, Any],
+    *,
+    source: str = "scenario",
+    base_dir: str | os.PathLike[str] | None = None,
+    default_name: str = "",
+) -> ChainScenario:
+    """Build a :class:`ChainScenario` from a parsed file: ``[simulation]`` and ``[[joints]]``.
+
+    Each ``[[joints]]`` entry has ``name``, ``type``, ``axis``, ``parent`` (``"base"`` or an earlier
+    joint's name; the previous joint when omitted, so a list is a serial chain), ``origin``,
+    ``mass``, ``com``, ``inertia``, ``armature``, ``initial_position``, ``initial_velocity`` and the
+    tables ``drive``, ``envelope``, ``load``, ``friction`` with the one-joint file's keys.
+
+    Raises:
+        InputError: one line naming ``source``, the key, the value and what was expected.
+    """
+    from drive_envelope._src.scenario import spec as one
+    from drive_envelope._src.scenario.checks import check_keys, read_text, table
+
+    check_keys(data, _TOP_KEYS, source, "")
+    entries = data.get("joints")
+    if not isinstance(entries, list) or not entries or not all(isinstance(e, Mapping) for e in entries):
+        raise InputError(f"{source}: key 'joints': expected a list of [[joints]] tables, got {entries!r}")
+    try:
+        simulation = one._read_simulation(table(data, "simulation", source), source)
+        if "gravity" not in table(data, "simulation", source):
+            simulation = dataclasses.replace(simulation, gravity=STANDARD_GRAVITY)
+        joints: list[ChainJoint] = []
+        for index, entry in enumerate(entries):
+            joints.append(_read_chain_joint(entry, index, joints, source, base_dir, one))
+        return ChainScenario(
+            joints=tuple(joints),
+            simulation=simulation,
+            name=read_text(data, "name", source) or default_name,
+            description=read_text(data, "description", source),
+        )
+    except InputError as exc:
+        message = str(exc)
+        raise InputError(message if message.startswith(f"{source}:") else f"{source}: {message}") from None
+
+
+def _read_chain_joint(
+    entry: Mapping[str, Any],
+    index: int,
+    earlier: list[ChainJoint],
+    source: str,
+    base_dir: str | os.PathLike[str] | None,
+    one: Any,
+) -> ChainJoint:
+    from drive_envelope._src.scenario.checks import check_keys, choice, quantities, read_text, table, unit_for
+    from drive_envelope._src.scenario.loads import read_friction
+
+    where = f"joints[{index}]"
+    check_keys(entry, _JOINT_KEYS, source, where)
+    name = read_text(entry, "name", source) or f"joint{index}"
+    kind = choice(entry, where, "type", ("revolute", "prismatic"), source)
+    axis = choice(entry, where, "axis", ("z", "x", "y"), source)
+    parent_name = entry.get("parent", earlier[-1].name if earlier else "base")
+    names = [joint.name for joint in earlier]
+    if parent_name == "base":
+        parent = -1
+    elif parent_name in names:
+        parent = names.index(parent_name)
+    else:
+        raise InputError(
+            f"{source}: key '{where}.parent': expected 'base' or an earlier joint "
+            f"({', '.join(names) or 'none yet'}), got {parent_name!r}"
+        )
+    for key in ("mass", "inertia"):
+        if key not in entry:
+            raise InputError(
+                f"{source}: missing required key '{where}.{key}' "
+                f"({'kg' if key == 'mass' else 'kg*m^2, 3 numbers'})"
+            )
+    vectors = {key: _read_vector(entry, key, where, source, unit) for key, unit in
+               (("origin", "m"), ("com", "m"), ("inertia", "kg*m**2")) if key in entry}  # fmt: skip
+    units = {
+        "mass": "kg",
+        "armature": unit_for(kind, "kg*m**2", "kg"),
+        "initial_position": unit_for(kind, "rad", "m"),
+        "initial_velocity": unit_for(kind, "rad/s", "m/s"),
+    }
+    scalars = quantities(entry, where, units, source)
+    prefix = f"{where}."
+    drive = _with_prefix(lambda: one._read_drive(table(entry, "drive", source), kind, source), prefix)
+    envelope, drive = _with_prefix(
+        lambda: one._read_envelope(table(entry, "envelope", source), drive, kind, source, base_dir), prefix
+    )
+    load = _with_prefix(lambda: one._read_load(table(entry, "load", source), kind, source), prefix)
+    friction = _with_prefix(lambda: read_friction(table(entry, "friction", source), kind, source), prefix)
+    return ChainJoint(
+        name=name, type=kind, axis=axis, parent=parent, drive=drive, envelope=envelope, load=load,  # type: ignore[arg-type]
+        friction=friction, **vectors, **scalars,  # type: ignore[arg-type]
+    )  # fmt: skip
+
+
+def _with_prefix(read: Any, prefix: str) -> Any:
+    """Run a one-joint table reader, naming the key inside this ``[[joints]]`` entry."""
+    try:
+        return read()
+    except InputError as exc:
+        message = str(exc)
+        for section in ("drive", "envelope", "load", "friction", "joint"):
+            message = message.replace(f"'{section}.", f"'{prefix}{section}.")
+        raise InputError(message) from None
+
+
+def _read_vector(entry: Mapping[str, Any], key: str, where: str, source: str, unit: str) -> Vector3:
+    from drive_envelope._src.values import read_quantity
+
+    value = entry[key]
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise InputError(
+            f"{source}: key '{where}.{key}': expected three numbers [x, y, z] ({unit}), got {value!r}"
+        )
+    return tuple(read_quantity(item, unit, f"{source}: key '{where}.{key}'") for item in value)  # type: ignore[return-value]
+
+
+def load_stand(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> Scenario | ChainScenario:
+    """Read a one-joint or a chain scenario file: a file with ``[[joints]]`` is a chain.
+
+    Raises:
+        InputError: one line naming the file, the key, the value and what was expected.
+    """
+    from drive_envelope._src.io.files import read_mapping
+    from drive_envelope._src.scenario.overrides import apply_overrides
+    from drive_envelope._src.scenario.spec import scenario_from_mapping
+
+    file = Path(path)
+    data = apply_overrides(read_mapping(file), overrides)
+    if is_chain_mapping(data):
+        return chain_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+    return scenario_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)

@@ -17,8 +17,9 @@ def register(subparsers: Any) -> None:
         "simulate",
         help="simulate one actuated joint with the PhysX drive and envelope",
         description=(
-            "Run a test-stand scenario (one joint, fixed base, rigid inertia) and write time, position, "
-            "velocity and the step-average total actuator effort (SI) as CSV, JSON or Parquet. A run of "
+            "Run a test-stand scenario (one joint, fixed base, rigid inertia; or a chain of links with a "
+            "[[joints]] list, engines reference and physx) and write time, position, velocity and the "
+            "step-average total actuator effort (SI) as CSV, JSON or Parquet. A run of "
             "more than --max-steps steps is refused before it starts; long runs show their progress on "
             "stderr when it is a terminal."
         ),
@@ -68,8 +69,9 @@ def _run(args: argparse.Namespace) -> int:
 
     from drive_envelope._src.cli.common import Progress, checked_output, status, warn
     from drive_envelope._src.errors import EngineWarning, InputError
-    from drive_envelope._src.scenario.spec import load_scenario
+    from drive_envelope._src.scenario.chain import ChainScenario, load_stand
     from drive_envelope._src.scenario.trajectory import (
+        Trajectory,
         save_trajectory,
         write_trajectory_csv,
         write_trajectory_json,
@@ -83,7 +85,9 @@ def _run(args: argparse.Namespace) -> int:
         from drive_envelope._src.io.atomic import check_writable
 
         check_writable(output, force=args.force)
-    scenario = load_scenario(args.file, args.overrides)
+    scenario = load_stand(args.file, args.overrides)  # [[joints]]: a multi-DOF chain
+    if isinstance(scenario, ChainScenario) and chosen == "parquet":
+        raise InputError(f"--output {args.output!r}: chain trajectories are written as CSV or JSON")
     try:
         steps = check_steps(scenario, args.max_steps)
     except InputError as exc:
@@ -102,12 +106,39 @@ def _run(args: argparse.Namespace) -> int:
     for item in caught:  # where an engine is known to part from PhysX on this run
         if issubclass(item.category, EngineWarning):
             warn(str(item.message))
+    if not isinstance(trajectory, Trajectory):
+        return _write_chain(trajectory, output, chosen, args.force)
     if output is None:
         writer = write_trajectory_json if chosen == "json" else write_trajectory_csv
         writer(trajectory, sys.stdout)
         return 0
     save_trajectory(trajectory, output, format=chosen, force=args.force)
     status(_summary(trajectory, output))
+    return 0
+
+
+def _write_chain(trajectory: Any, output: str | None, chosen: str, force: bool) -> int:
+    """Write a chain run's trajectory (CSV or JSON, ``<joint>.<quantity>`` columns)."""
+    from drive_envelope._src.cli.common import status
+    from drive_envelope._src.scenario.chain_trajectory import (
+        chain_trajectory_to_csv,
+        chain_trajectory_to_json,
+        save_chain_trajectory,
+    )
+
+    if output is None:
+        sys.stdout.write(
+            chain_trajectory_to_json(trajectory) if chosen == "json" else chain_trajectory_to_csv(trajectory)
+        )
+        return 0
+    save_chain_trajectory(trajectory, output, format=chosen, force=force)
+    finals = ", ".join(
+        f"{name} {v:.6g}" for name, v in zip(trajectory.joints, trajectory.velocity[-1], strict=True)
+    )
+    status(
+        f"wrote {len(trajectory)} rows of {len(trajectory.joints)} joints to {output} "
+        f"(engine {trajectory.engine}): final velocities {finals}"
+    )
     return 0
 
 

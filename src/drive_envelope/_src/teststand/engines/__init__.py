@@ -22,11 +22,13 @@ import importlib
 import importlib.util
 from collections.abc import Callable
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, overload
 
 from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
+    from drive_envelope._src.scenario.chain import ChainScenario
+    from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
     from drive_envelope._src.scenario.schedule import DriveSchedule
     from drive_envelope._src.scenario.spec import Scenario
     from drive_envelope._src.scenario.trajectory import Trajectory
@@ -102,7 +104,7 @@ def engine_module(name: str) -> ModuleType:
         raise _missing_extra(name, (exc.name or "?").split(".")[0]) from None
 
 
-def check_steps(scenario: Scenario, max_steps: int = MAX_STEPS) -> int:
+def check_steps(scenario: Scenario | ChainScenario, max_steps: int = MAX_STEPS) -> int:
     """The number of steps of ``scenario``, refused above ``max_steps``.
 
     Raises:
@@ -153,15 +155,37 @@ def check_loads(scenario: Scenario, engine: str, module: ModuleType) -> None:
             )
 
 
+@overload
 def simulate(
     scenario: Scenario,
+    engine: str = ...,
+    *,
+    max_steps: int = ...,
+    progress: ProgressCallback | None = ...,
+    schedule: DriveSchedule | None = ...,
+) -> Trajectory: ...
+@overload
+def simulate(
+    scenario: ChainScenario,
+    engine: str = ...,
+    *,
+    max_steps: int = ...,
+    progress: ProgressCallback | None = ...,
+    schedule: DriveSchedule | None = ...,
+) -> ChainTrajectory: ...
+def simulate(
+    scenario: Scenario | ChainScenario,
     engine: str = "reference",
     *,
     max_steps: int = MAX_STEPS,
     progress: ProgressCallback | None = None,
     schedule: DriveSchedule | None = None,
-) -> Trajectory:
+) -> Trajectory | ChainTrajectory:
     """Run ``scenario`` on ``engine`` and return its trajectory.
+
+    A :class:`~drive_envelope._src.scenario.chain.ChainScenario` runs on the engines whose module
+    has ``simulate_chain`` (reference, physx) and gives a
+    :class:`~drive_envelope._src.scenario.chain_trajectory.ChainTrajectory`.
 
     Args:
         scenario: The validated scenario (SI).
@@ -178,6 +202,21 @@ def simulate(
     """
     check_steps(scenario, max_steps)
     module = engine_module(engine)
+    from drive_envelope._src.scenario.chain import ChainScenario
+
+    if isinstance(scenario, ChainScenario):  # a multi-DOF stand: the engine's chain runner
+        if not hasattr(module, "simulate_chain"):
+            raise InputError(
+                f"--engine {engine}: this engine does not run chain scenarios ([[joints]]) yet; "
+                "run it on reference or physx"
+            )
+        import inspect
+
+        takes_progress = "progress" in inspect.signature(module.simulate_chain).parameters
+        chain: ChainTrajectory = module.simulate_chain(
+            scenario, **({"progress": progress} if progress is not None and takes_progress else {})
+        )
+        return chain
     check_loads(scenario, engine, module)
     import inspect  # here, not at the top: the registry is imported for --help
 

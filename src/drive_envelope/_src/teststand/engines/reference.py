@@ -56,6 +56,7 @@ from drive_envelope._src.scenario.loads import FrictionSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.teststand.engines.chain import simulate_chain
 from drive_envelope._src.teststand.engines.solver_terms import (
     ImplicitDriveDesc,
     compute_drive_impulse,
@@ -71,6 +72,7 @@ __all__ = [
     "compute_friction_impulse",
     "implicit_drive_desc",
     "simulate",
+    "simulate_chain",
     "step",
 ]
 
