@@ -100,7 +100,9 @@ def _open(source: Any) -> Any:
     from drive_envelope._src.adapters.usd.stage import open_stage
 
     if isinstance(source, (str, os.PathLike)):
-        return open_stage(source)
+        # not strict: add_usd may have built USD's schema registry first; the envelope is read from
+        # the layers' apiSchemas and authored attributes (authoring.has_envelope_api)
+        return open_stage(source, strict=False)
     return source
 
 

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ENVELOPE_API",
+    "has_envelope_api",
     "DriveRecord",
     "EnvelopeAuthoringWarning",
     "author_envelope",
@@ -475,6 +476,23 @@ def _drive_instances(prim: Usd.Prim) -> list[str]:
     return sorted(names, key=lambda name: (order.get(name, len(order)), name))
 
 
+def has_envelope_api(prim: Usd.Prim, inst: str) -> bool:
+    """Whether ``PhysxDrivePerformanceEnvelopeAPI:<inst>`` is applied, registered with USD or not.
+
+    USD builds its schema registry once per process: if Newton's ``add_usd`` (or anything) read a
+    stage before ``physx_usd_schemas`` was imported, ``HasAPI`` says False for an API that the
+    layers do apply. The layers' ``apiSchemas`` list ops, composed weakest first, still say it, and
+    the attributes are authored there, so the drive's envelope is read either way.
+    """
+    if prim.HasAPI(ENVELOPE_API, inst):
+        return True
+    applied: list[str] = []
+    for spec in reversed(prim.GetPrimStack()):  # weakest opinion first
+        if spec.HasInfo("apiSchemas"):
+            applied = list(spec.GetInfo("apiSchemas").ApplyOperations(applied))
+    return f"{ENVELOPE_API}:{inst}" in applied
+
+
 def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
     """Every drive on every revolute, prismatic or D6 joint of the stage, in SI, in stage order."""
     from pxr import Usd, UsdPhysics
@@ -491,7 +509,7 @@ def list_drives(stage: Usd.Stage) -> list[DriveRecord]:
             continue
         for inst in _drive_instances(prim):
             max_effort, stiffness, damping = _drive_values(prim, inst, units)
-            envelope = _envelope_of(prim, inst, units) if prim.HasAPI(ENVELOPE_API, inst) else None
+            envelope = _envelope_of(prim, inst, units) if has_envelope_api(prim, inst) else None
             records.append(
                 DriveRecord(
                     joint_path=str(prim.GetPath()),

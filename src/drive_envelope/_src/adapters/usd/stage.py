@@ -52,16 +52,20 @@ class UsdStageWarning(UserWarning):
     """A problem USD found while composing an asset (a sublayer or reference it cannot load)."""
 
 
-def register_schemas() -> None:
+def register_schemas(*, strict: bool = True) -> None:
     """Make the codeless PhysX schemas known to USD (``import physx_usd_schemas`` registers them).
 
     USD builds its schema registry once per process, on first use: if something read schemas
     before ``physx_usd_schemas`` was imported (Newton's ``add_usd``, another library), the envelope
     API stays unknown and every joint would silently read as having no envelope. That is refused.
 
+    Args:
+        strict: Refuse a registry built before the PhysX schemas were registered. A reader that
+            finds the envelope API in the layers' ``apiSchemas`` (``list_drives``) passes False.
+
     Raises:
-        InputError: usd-core or physx-usd-schemas is not installed, or USD's schema registry was
-            built before the PhysX schemas were registered.
+        InputError: usd-core or physx-usd-schemas is not installed, or (``strict``) USD's schema
+            registry was built before the PhysX schemas were registered.
     """
     try:
         import physx_usd_schemas  # noqa: F401 - registers the schema plugins on import
@@ -70,7 +74,7 @@ def register_schemas() -> None:
         raise InputError(
             f"USD support needs the 'usd' extra (pip install 'drive-envelope[usd]'): missing {exc.name!r}"
         ) from None
-    if Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(_ENVELOPE_API) is None:
+    if strict and Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(_ENVELOPE_API) is None:
         raise InputError(
             f"USD does not know {_ENVELOPE_API}: its schema registry was built before the PhysX schemas "
             "were registered; call drive_envelope.usd.register_schemas() (or import physx_usd_schemas) "
@@ -174,7 +178,7 @@ def _composition_errors(stage: Any) -> list[Any]:
     return list(errors()) if errors is not None else []
 
 
-def open_stage(path: str | os.PathLike[str]) -> Usd.Stage:
+def open_stage(path: str | os.PathLike[str], *, strict: bool = True) -> Usd.Stage:
     """Open a USD file (payloads loaded) with the PhysX schemas registered.
 
     A layer of that file that this process already has open is shared (as USD always does); if it
@@ -187,7 +191,7 @@ def open_stage(path: str | os.PathLike[str]) -> Usd.Stage:
     """
     file = Path(path)
     _check_readable(file)
-    register_schemas()
+    register_schemas(strict=strict)  # strict=False: a reader of authored attributes only
     from pxr import Usd
 
     _reuse_open_layer(file)
