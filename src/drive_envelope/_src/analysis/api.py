@@ -202,7 +202,15 @@ def fit_curve(
     if not curve_options.name:
         curve_options = replace(curve_options, name=Path(path).stem)
     result = _fit_from(str(path), velocity, effort, curve_options)
-    note = "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
+    if result.samples_outside == 0:
+        note = "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
+    else:
+        # only a held parameter can leave a curve's point outside (the fit contains every point)
+        held = ", ".join(f"{name} = {value:g}" for name, value in curve_options.fixed.items())
+        note = (
+            f"digitized curve: {result.samples_outside} point(s) outside, cut off by the fixed "
+            f"{held or 'parameters'} (SI); no bootstrap; the residuals show how far"
+        )
     # a curve's points lie on the boundary by construction: a line through one point (a stall point)
     # is how a datasheet draws it, not a spike, and the outlier allowance does not apply to curves
     notes = [kept for kept in result.notes if not kept.startswith(WARNING)]

@@ -108,6 +108,9 @@ def format_fit(result: FitResult) -> str:
     rows = []
     for p in result.parameters:
         interval = "-" if p.interval is None else f"[{p.interval[0]:.6g}, {p.interval[1]:.6g}]"
+        if p.interval is not None and p.interval[0] == p.interval[1] and p.std:
+            # most resamples agree exactly; the std comes from the few (under 5 %) that do not
+            interval = f"{p.interval[0]:.6g} (>= 95 % of resamples; std from the rest)"
         rows.append(
             [
                 p.name,
