@@ -203,7 +203,9 @@ def fit_curve(
         curve_options = replace(curve_options, name=Path(path).stem)
     result = _fit_from(str(path), velocity, effort, curve_options)
     if result.samples_outside == 0:
-        note = "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
+        note = (
+            "digitized curve: every point contained, no bootstrap; the residuals show the digitizing scatter"
+        )
     else:
         # only a held parameter can leave a curve's point outside (the fit contains every point)
         held = ", ".join(f"{name} = {value:g}" for name, value in curve_options.fixed.items())
