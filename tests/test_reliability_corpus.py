@@ -81,6 +81,16 @@ def _not_utf8_usda(path: Path) -> None:
     path.write_bytes(text[:start] + b'def Xform "caf\xe9" {}\n' + text[start:])  # Latin-1, not UTF-8
 
 
+def _many_points(path: Path) -> None:
+    points = ", ".join(f'["{i} rpm", "0.2 N*m"]' for i in range(10_001))
+    path.write_text(
+        'name = "many"\njoint = "revolute"\n[motor]\ntorque_constant = "0.091 N*m/A"\n'
+        'speed_constant = "100 rpm/V"\nterminal_resistance = "170 mohm"\n[gear]\nratio = 6.0\n'
+        f"[losses]\noperating_points = [{points}]\n",
+        encoding="utf-8",
+    )
+
+
 def _long_value_map(path: Path) -> None:
     path.write_text(f'[joints]\nhip = "{LONG_NAME}.toml"\n', encoding="utf-8")
 
@@ -92,6 +102,7 @@ GENERATED: dict[str, Callable[[Path], None]] = {
     "long_field_trajectory.csv": _long_field_trajectory,
     "not_utf8.usda": _not_utf8_usda,
     "long_value_map.toml": _long_value_map,
+    "many_points.toml": _many_points,
     **{f"fifo.{suffix}": _fifo for suffix in ("toml", "json", "csv", "usda", "xml")},
     **{f"endless.{suffix}": _endless for suffix in ("toml", "json", "csv", "usda", "xml")},
 }

@@ -55,7 +55,7 @@ def arrow_joint(column: Any, codes: JointCodes, plan: ColumnPlan, first_row: int
     if not pa.types.is_dictionary(column.type):
         column = column.dictionary_encode()
     names = [str(value) for value in column.dictionary.to_pylist()]
-    return codes.encode(names, column.indices.to_numpy(zero_copy_only=False))
+    return codes.encode(names, column.indices.to_numpy(zero_copy_only=False), plan, first_row)
 
 
 def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
@@ -131,7 +131,7 @@ def iter_table(table: Any, columns: LogColumns, chunk_rows: int, label: str) -> 
             joint = arrow_joint(raw, codes, plan, 1)
         else:
             names, inverse = np.unique(np.asarray(raw).astype(str), return_inverse=True)
-            joint = codes.encode(list(names), inverse.ravel())
+            joint = codes.encode(list(names), inverse.ravel(), plan, 1)
         if joint.shape != (total,):
             raise InputError(
                 f"{label}: column {plan.name('joint')!r} has {joint.shape[0]} rows, the others {total}"

@@ -189,7 +189,7 @@ def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str
             if plan.joint:
                 column = plan.position["joint"]
                 names, inverse = np.unique([fields[column].strip() for fields in block], return_inverse=True)
-                joint = codes.encode(list(names), inverse)
+                joint = codes.encode(list(names), inverse, plan, row)
 
             def text(role: str, index: int, block: list[list[str]] = block) -> str:
                 return block[index][plan.position[role]]

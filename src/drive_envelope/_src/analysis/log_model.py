@@ -203,8 +203,23 @@ class JointCodes:
     def __init__(self) -> None:
         self.codes: dict[str, int] = {}
 
-    def encode(self, names: Sequence[Any], indices: npt.NDArray[Any]) -> IntArray:
-        """Codes for ``names[indices]`` (a dictionary-encoded column)."""
+    def encode(
+        self, names: Sequence[Any], indices: npt.NDArray[Any], plan: ColumnPlan, first_row: int
+    ) -> IntArray:
+        """Codes for ``names[indices]`` (a dictionary-encoded column whose first row is ``first_row``).
+
+        Raises:
+            InputError: a row's joint name is empty (or only spaces), naming the row: it would be
+                checked as a joint named ``''``.
+        """
+        blank = [code for code, name in enumerate(names) if not str(name).strip()]
+        if blank:
+            rows = np.flatnonzero(np.isin(np.asarray(indices), blank))
+            if rows.size:
+                raise InputError(
+                    f"{plan.label}: row {first_row + int(rows[0])}, column {plan.name('joint')!r}: "
+                    "empty joint name; expected the joint's name in every row"
+                )
         lookup = np.array(
             [self.codes.setdefault(str(name).strip(), len(self.codes)) for name in names], dtype=np.intp
         )

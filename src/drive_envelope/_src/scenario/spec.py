@@ -47,6 +47,7 @@ from drive_envelope._src.scenario.overrides import apply_overrides, parse_overri
 from drive_envelope._src.units import to_si
 
 __all__ = [
+    "MAX_POSITION",
     "DriveSpec",
     "FrictionSpec",
     "JointSpec",
@@ -73,6 +74,8 @@ _ENVELOPE_KEYS = (
 # PhysX steps in float32: a (sub)step below its smallest normal number, or above its largest, is
 # 0 or inf there, and the float64 reference would divide by a subnormal
 _MIN_STEP = 1.1754943508222875e-38
+MAX_POSITION = 1e6
+"""Largest ``|initial_position|`` [rad or m]: float32's spacing there is 0.0625 (PhysX steps in float32)."""
 _MAX_STEP = 3.4028234663852886e38
 
 
@@ -100,6 +103,11 @@ class JointSpec:
         _check_finite("joint.armature", self.armature, nonnegative=True)
         _check_finite("joint.initial_position", self.initial_position)
         _check_finite("joint.initial_velocity", self.initial_velocity)
+        if abs(self.initial_position) > MAX_POSITION:
+            raise InputError(
+                f"joint.initial_position must be within +-{MAX_POSITION:g} rad or m (float32 engines "
+                f"resolve positions beyond it to worse than 0.06), got {self.initial_position!r}"
+            )
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
