@@ -163,7 +163,7 @@ def test_infinite_speed_with_resistance_is_bounded() -> None:
     [
         ("max_effort", -1.0, "max_effort must be >= 0, got -1.0"),
         ("max_effort", math.nan, "max_effort must be >= 0"),
-        ("max_effort", math.inf, "max_effort must be finite"),
+        ("velocity_dependent_resistance", math.inf, "velocity_dependent_resistance must be finite"),
         ("velocity_dependent_resistance", -0.1, "velocity_dependent_resistance must be >= 0"),
         ("speed_effort_gradient", math.inf, "speed_effort_gradient must be finite"),
         ("max_actuator_velocity", -2.0, "max_actuator_velocity must be >= 0"),

@@ -64,6 +64,11 @@ class QuadrantCorners(NamedTuple):
     """Largest velocity at zero effort: ``(min(max_actuator_velocity, max_effort / resistance), 0)``."""
 
 
+NO_LIMIT_FIELDS = ("max_effort", "max_actuator_velocity")
+"""The fields whose "no limit" is ``inf``: the one rule for every surface (Python, files, Isaac Lab;
+the MuJoCo plugin writes it -1 in ``dynprm`` and reads it back as ``inf``; PhysX's FLT_MAX reads as it)."""
+
+
 @dataclass(frozen=True, kw_only=True, slots=True)
 class PerformanceEnvelope:
     """The PhysX drive performance envelope of one joint axis, joint side, SI units.
@@ -73,8 +78,8 @@ class PerformanceEnvelope:
     """
 
     max_effort: float
-    """Effort cap at zero velocity, PhysX ``maxEffort`` (the drive's maxForce) [N*m or N]. ``>= 0``,
-    finite; 0 allows no effort at all."""
+    """Effort cap at zero velocity, PhysX ``maxEffort`` (the drive's maxForce) [N*m or N]. ``>= 0``;
+    ``inf`` means no effort limit (PhysX's unauthored maxForce, FLT_MAX); 0 allows no effort at all."""
     max_actuator_velocity: float = math.inf
     """Velocity cap at zero effort, PhysX ``maxActuatorVelocity`` [rad/s or m/s]. ``>= 0``;
     ``inf`` means no speed limit."""
@@ -100,7 +105,7 @@ class PerformanceEnvelope:
             object.__setattr__(self, field, value)
             if math.isnan(value) or value < 0.0:
                 raise InputError(f"{field} must be >= 0, got {value!r}")
-            if math.isinf(value) and field != "max_actuator_velocity":
+            if math.isinf(value) and field not in NO_LIMIT_FIELDS:
                 raise InputError(f"{field} must be finite, got {value!r}")
 
     # -- the two curves -------------------------------------------------------------------------
@@ -129,9 +134,11 @@ class PerformanceEnvelope:
         """
         resistance, gradient = self.velocity_dependent_resistance, self.speed_effort_gradient
         if resistance > 0.0:
-            with np.errstate(over="ignore"):  # R*|v| beyond float range: -inf, then no effort (0)
+            # R*|v| beyond float range: -inf, then no effort (0); inf - inf (no effort cap at an
+            # infinite speed) is NaN, which fmax turns into 0, the limit at infinite speed
+            with np.errstate(over="ignore", invalid="ignore"):
                 limit = np.multiply(speed, -resistance, out=np.empty_like(speed))
-            limit += self.max_effort
+                limit += self.max_effort
         else:
             limit = np.full_like(speed, self.max_effort)
             if not math.isfinite(self.max_actuator_velocity):  # no line binds: only a NaN shows
@@ -157,14 +164,18 @@ class PerformanceEnvelope:
             possible); with ``R = 0`` the second term is dropped and ``|tau| > max_effort`` gives 0.
         """
         magnitude = np.abs(np.asarray(effort, dtype=np.float64))
-        limit = self.max_actuator_velocity - self.speed_effort_gradient * magnitude
+        gradient = self.speed_effort_gradient
+        # G = 0: the speed cap does not depend on effort (no 0 * inf at an infinite effort)
+        limit = self.max_actuator_velocity - (gradient * magnitude if gradient > 0.0 else 0.0)
         if self.velocity_dependent_resistance > 0.0:
-            with np.errstate(over="ignore"):  # a subnormal resistance: no speed limit from eq. 1 (inf)
+            # a subnormal resistance: no speed limit from eq. 1 (inf); inf - inf (no effort cap at
+            # an infinite effort): NaN, read as 0 below
+            with np.errstate(over="ignore", invalid="ignore"):
                 eq1 = (self.max_effort - magnitude) / self.velocity_dependent_resistance
             limit = np.minimum(limit, eq1)
         else:
             limit = np.where(magnitude > self.max_effort, 0.0, limit)
-        return np.maximum(limit, 0.0)
+        return np.fmax(limit, 0.0)
 
     def contains(self, velocity: ArrayLike, effort: ArrayLike, *, atol: float = 0.0) -> npt.NDArray[np.bool_]:
         """Whether the operating points ``(velocity, effort)`` satisfy both curves.

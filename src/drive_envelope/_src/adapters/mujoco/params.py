@@ -192,7 +192,7 @@ def _info(
     )
     try:
         envelope: PerformanceEnvelope | None = PerformanceEnvelope(
-            max_effort=raw[0],
+            max_effort=math.inf if raw[0] == NO_LIMIT else raw[0],
             max_actuator_velocity=math.inf if raw[1] == NO_LIMIT else raw[1],
             velocity_dependent_resistance=raw[2],
             speed_effort_gradient=raw[3],
