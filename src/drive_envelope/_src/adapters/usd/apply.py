@@ -13,6 +13,7 @@ authored on their prototype's source (:mod:`~drive_envelope._src.adapters.usd.in
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -30,7 +31,7 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["AppliedDrive", "Assignment", "apply_envelopes", "joint_paths", "map_assignments"]
+__all__ = ["AppliedDrive", "Assignment", "apply_envelopes", "joint_paths", "map_assignments", "rating_report"]
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -61,6 +62,12 @@ class AppliedDrive:
     """Prim path the opinions went to: the joint, or its prototype's source for an instanced joint."""
     warnings: tuple[str, ...] = ()
     """Authoring warnings for this joint."""
+    where: str = ""
+    """The map key (or flag) of the assignment: reports group joints by it."""
+    rated_effort: float = math.inf
+    """The asset's own maxForce before the edit [N*m or N]; ``inf`` if none."""
+    rated_speed: float = math.inf
+    """The asset's ``physxJoint:maxJointVelocity`` [rad/s or m/s]; ``inf`` if none."""
 
 
 def joint_paths(stage: Usd.Stage) -> list[str]:
@@ -113,7 +120,7 @@ def apply_envelopes(stage: Usd.Stage, assignments: Sequence[Assignment]) -> list
             edited in memory, so callers write nothing.
     """
     from drive_envelope._src.adapters.usd.articulation import articulated_joints
-    from drive_envelope._src.adapters.usd.authoring import author_envelope, resolve_joint
+    from drive_envelope._src.adapters.usd.authoring import author_envelope, model_rating, resolve_joint
     from drive_envelope._src.adapters.usd.instancing import edit_site
 
     articulated = articulated_joints(stage)
@@ -127,6 +134,7 @@ def apply_envelopes(stage: Usd.Stage, assignments: Sequence[Assignment]) -> list
             if first is not item:
                 _check_shared(first, item, site)
                 continue
+            rated_effort, rated_speed = model_rating(prim, item.instance)
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 inst = author_envelope(prim, item.envelope, item.instance, articulated=articulated)
@@ -139,9 +147,54 @@ def apply_envelopes(stage: Usd.Stage, assignments: Sequence[Assignment]) -> list
                 envelope=item.envelope,
                 authored_at=site,
                 warnings=tuple(str(w.message) for w in caught),
+                where=item.where or item.joint_path,
+                rated_effort=rated_effort,
+                rated_speed=rated_speed,
             )
         )
     return results
+
+
+def rating_report(applied: Sequence[AppliedDrive]) -> list[str]:
+    """Where the asset's author and the envelope's source disagree, one line per map key.
+
+    A cap more than 10 % below the asset's maxForce, or a speed above the joint's maxJointVelocity.
+    """
+    groups: dict[str, list[AppliedDrive]] = {}
+    for item in applied:
+        groups.setdefault(item.where, []).append(item)
+    lines = []
+    for where, items in groups.items():
+        env = items[0].envelope
+        effort_unit, speed_unit = ("N*m", "rad/s") if env.joint == "revolute" else ("N", "m/s")
+        low = [
+            i for i in items if math.isfinite(i.rated_effort) and i.envelope.max_effort < 0.9 * i.rated_effort
+        ]
+        if low:
+            rated = max(i.rated_effort for i in low)
+            lines.append(
+                f"{where}: max_effort {env.max_effort:g} {effort_unit} is "
+                f"{100 * (1 - env.max_effort / rated):.0f} % below the asset's maxForce {rated:g} "
+                f"{effort_unit} on {_names([i.joint_path for i in low])}: the envelope replaces it"
+            )
+        fast = [
+            i
+            for i in items
+            if math.isfinite(i.rated_speed) and i.envelope.max_actuator_velocity > i.rated_speed
+        ]
+        if fast:
+            limit = min(i.rated_speed for i in fast)
+            lines.append(
+                f"{where}: max_actuator_velocity {env.max_actuator_velocity:g} {speed_unit} is above the "
+                f"joint's maxJointVelocity {limit:g} {speed_unit} on {_names([i.joint_path for i in fast])}: "
+                "PhysX's joint limit binds first"
+            )
+    return lines
+
+
+def _names(paths: Sequence[str]) -> str:
+    shown = ", ".join(paths[:3])
+    return shown + (f" and {len(paths) - 3} more" if len(paths) > 3 else "")
 
 
 def _check_shared(first: Assignment, item: Assignment, site: str) -> None:

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ENVELOPE_API",
     "has_envelope_api",
+    "model_rating",
     "DriveRecord",
     "EnvelopeAuthoringWarning",
     "author_envelope",
@@ -438,6 +439,28 @@ def _drive_values(prim: Usd.Prim, inst: str, units: StageUnits) -> tuple[float, 
         angle = units.position(inst) if is_angular(inst) else 1.0
         return max_effort, stiffness * angle, damping * angle
     return max_effort, stiffness / units.per_position(inst), damping / units.per_speed(inst)
+
+
+def model_rating(prim: Usd.Prim, instance: str | None) -> tuple[float, float]:
+    """What the asset itself says a joint's drive can do, before an envelope replaces it.
+
+    Returns:
+        ``(maxForce, physxJoint:maxJointVelocity)`` in SI [N*m or N, rad/s or m/s]; ``inf`` where
+        unauthored or unlimited (PhysX's FLT_MAX), or where the instance has no drive yet.
+    """
+    from pxr import UsdPhysics
+
+    inst = _choose_instance(prim, joint_kind(prim), instance)
+    units = stage_units(prim.GetStage())
+    effort = math.inf
+    if prim.HasAPI(UsdPhysics.DriveAPI, inst):
+        effort = _drive_values(prim, inst, units)[0]
+    speed = math.inf
+    attr = prim.GetAttribute("physxJoint:maxJointVelocity")
+    raw = attr.Get() if attr and attr.HasAuthoredValue() else None
+    if isinstance(raw, (int, float)) and not isinstance(raw, bool) and 0.0 < float(raw) < _FLT_MAX:
+        speed = float(raw) / units.velocity(inst)
+    return effort, speed
 
 
 def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnvelope | None:

@@ -112,6 +112,10 @@ def _apply_and_save(args: argparse.Namespace) -> tuple[list[Any], str, list[Any]
     for item in applied:
         for message in item.warnings:
             warn(message)
+    from drive_envelope._src.adapters.usd.apply import rating_report
+
+    for message in rating_report(applied):
+        warn(message)
     output = None if args.in_place else args.output
     save_stage(stage, output, flatten=args.flatten, force=args.force)
     return applied, args.asset if args.in_place else args.output, list_drives(stage)
