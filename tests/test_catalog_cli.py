@@ -25,7 +25,10 @@ def test_joint_filter_lists_only_linear_actuators(capsys: pytest.CaptureFixture[
     """--joint prismatic: the Actuonix linear servos and nothing rotary."""
     code, out, _ = run(capsys, "catalog", "--joint", "prismatic", "--json")
     assert code == 0
-    items = json.loads(out)
+    data = json.loads(out)  # an object, as every command's JSON (issue 24)
+    assert data["filters"] == {"joint": "prismatic", "search": None}
+    items = data["actuators"]
+    assert data["count"] == len(items)
     assert items and all(item["joint"] == "prismatic" for item in items)
     assert {"actuonix-l16-63-6-r", "actuonix-l12-50-210-12-s"} <= {item["key"] for item in items}
     expected = {e.key for e in catalog_entries() if e.joint == "prismatic"}
@@ -35,7 +38,7 @@ def test_joint_filter_lists_only_linear_actuators(capsys: pytest.CaptureFixture[
 def test_search_matches_all_words_case_insensitively(capsys: pytest.CaptureFixture[str]) -> None:
     """--search 'Unitree G1': every G1 motor, no Go2 or H1 entry."""
     code, out, _ = run(capsys, "catalog", "--search", "Unitree G1", "--json")
-    keys = {item["key"] for item in json.loads(out)}
+    keys = {item["key"] for item in json.loads(out)["actuators"]}
     assert code == 0
     assert {"unitree-g1-5020", "unitree-g1-7520-14", "unitree-g1-7520-22", "unitree-g1-4010"} <= keys
     assert not any(k.startswith(("unitree-go", "unitree-h1")) for k in keys)
@@ -52,7 +55,7 @@ def test_search_unitree_finds_every_unitree_entry(capsys: pytest.CaptureFixture[
 def test_listing_shows_the_derived_envelope(capsys: pytest.CaptureFixture[str]) -> None:
     """The JSON list carries the derived numbers: the Go2 calf is 45.43 N*m, 15.70 rad/s (Unitree URDF)."""
     _, out, _ = run(capsys, "catalog", "--search", "go2 calf", "--json")
-    (item,) = json.loads(out)
+    (item,) = json.loads(out)["actuators"]
     assert item["max_effort"] == 45.43 and item["max_actuator_velocity"] == 15.70
     assert item["sources"] and all(url.startswith("https://") for url in item["sources"])
 
@@ -91,7 +94,7 @@ def test_show_prints_the_file(capsys: pytest.CaptureFixture[str]) -> None:
 def test_maps_lists_the_shipped_robot_maps(capsys: pytest.CaptureFixture[str]) -> None:
     """catalog --maps --json: every shipped map with its robot and installed file."""
     code, out, _ = run(capsys, "catalog", "--maps", "--json")
-    maps = {m["key"]: m for m in json.loads(out)}
+    maps = {m["key"]: m for m in json.loads(out)["maps"]}
     assert code == 0
     assert {"unitree-go2", "unitree-g1", "so101", "franka-panda"} <= set(maps)
     assert Path(maps["unitree-go2"]["path"]).is_file()

@@ -249,7 +249,7 @@ def test_catalog_lists_and_shows(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "catalog")
     assert code == 0 and "tmotor-ak80-6" in out and "actuonix-l16-63-6-r" in out
     code, out, _ = run(capsys, "catalog", "--json")
-    assert len(json.loads(out)) >= 8
+    assert len(json.loads(out)["actuators"]) >= 8
     code, out, _ = run(capsys, "catalog", "tmotor-ak80-6")
     assert code == 0 and "https://" in out and "[motor]" in out
 

@@ -132,7 +132,12 @@ def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
             }
         )
     if as_json:
-        print(json.dumps(items, indent=2, ensure_ascii=False))
+        filters = {"joint": joint, "search": search}
+        print(
+            json.dumps(
+                {"count": len(items), "filters": filters, "actuators": items}, indent=2, ensure_ascii=False
+            )
+        )
         return 0
     if not rows:
         warn("no catalog actuator matches " + " and ".join(filter(None, [joint, search and repr(search)])))
@@ -153,7 +158,8 @@ def _maps(*, as_json: bool) -> int:
 
     maps = robot_maps()
     if as_json:
-        print(json.dumps([{"key": m.key, "robot": m.title, "path": str(m.path)} for m in maps], indent=2))
+        listed = [{"key": m.key, "robot": m.title, "path": str(m.path)} for m in maps]
+        print(json.dumps({"count": len(listed), "maps": listed}, indent=2))
         return 0
     print(format_table(["map", "robot", "file"], [[m.key, m.title, str(m.path)] for m in maps]))
     print(
