@@ -47,6 +47,7 @@ def register(subparsers: Any) -> None:
     )
     add_output_argument(apply, "the new MJCF file", metavar="OUT.xml")
     apply.add_argument("--force", action="store_true", help="replace a read-only output file")
+    add_format_argument(apply, ("text", "json"), "the report on stdout: a line per drive, or one JSON object")
     apply.set_defaults(func=_apply)
 
     show = actions.add_parser("show", help="list the model's envelope drives (and joints without one)")
@@ -146,7 +147,9 @@ def _apply(args: argparse.Namespace) -> int:
         warn(message)
     for message in _report(done, model):
         warn(message)
-    for item in done:
+    if args.format == "json":
+        _print_apply_json(done, args, len(drives))
+    for item in done if args.format == "text" else ():
         replaced = f"replaces {item.replaced}" if item.replaced else "new actuator"
         print(
             f"{item.joint}: drive {item.drive!r} ({replaced}; inputs {' '.join(item.inputs)}; gains "
@@ -154,6 +157,29 @@ def _apply(args: argparse.Namespace) -> int:
         )
     status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(drives)} drives)")
     return 0
+
+
+def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) -> None:
+    """The report of ``mujoco apply`` as one JSON object on stdout (inf written as ``"inf"``)."""
+    import json
+
+    from drive_envelope._src.io.envelope_file import envelope_to_json
+
+    drives = [
+        {
+            "joint": item.joint,
+            "drive": item.drive,
+            "replaced": item.replaced,
+            "inputs": list(item.inputs),
+            "gains_from": item.gains_from,
+            "stiffness": item.stiffness,
+            "damping": item.damping,
+            "envelope": json.loads(envelope_to_json(item.envelope)),
+        }
+        for item in done
+    ]
+    report = {"output": args.output, "model": args.model, "drives": drives, "reloaded_drives": reloaded}
+    print(json.dumps(report, indent=2, ensure_ascii=False))
 
 
 def _is_frcrange_warning(message: str) -> bool:

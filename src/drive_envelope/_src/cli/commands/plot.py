@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_force_argument, add_output_argument, integer_at_least
+from drive_envelope._src.cli.common import (
+    add_force_argument,
+    add_format_argument,
+    add_output_argument,
+    integer_at_least,
+)
 
 
 def register(subparsers: Any) -> None:
@@ -41,6 +46,9 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--dpi", type=integer_at_least(1), default=120, help="resolution of raster output (default 120)"
+    )
+    add_format_argument(
+        parser, ("text", "json"), "what to print: the status line, or a JSON report on stdout"
     )
     add_force_argument(parser)
     parser.set_defaults(func=_run)
@@ -78,6 +86,23 @@ def _run(args: argparse.Namespace) -> int:
         save_figure(handle, output, dpi=args.dpi, force=args.force)
     for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
         warn(message)  # matplotlib's (a glyph the font lacks, drawn as a box): one line each, no source
+    if args.format == "json":  # the report is the command's result: stdout
+        import json
+
+        from drive_envelope._src.io.envelope_file import envelope_to_json
+
+        report = {
+            "output": output,
+            "envelope": json.loads(envelope_to_json(envelope)),  # inf written as "inf", as everywhere
+            "trajectories": [
+                {"file": path, "label": p.label, "samples": len(p.velocity)}
+                for path, p in zip(args.trajectory, points, strict=True)
+            ],
+            "dpi": args.dpi,
+            "warnings": list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught)),
+        }
+        print(json.dumps(report, indent=2, ensure_ascii=False))
+        return 0
     status(f"wrote {output}")
     return 0
 

@@ -54,6 +54,7 @@ def register(subparsers: Any) -> None:
     apply.add_argument(
         "--force", action="store_true", help="replace a read-only output (or asset, with --in-place)"
     )
+    add_format_argument(apply, ("text", "json"), "the report on stdout: a line per drive, or one JSON object")
     apply.set_defaults(func=_apply)
 
     show = actions.add_parser("show", help="list every joint drive with its envelope in SI")
@@ -74,11 +75,33 @@ def _apply(args: argparse.Namespace) -> int:
     _check_apply_arguments(args)
     with _printed_warnings():
         applied, written, drives = _apply_and_save(args)
-        for item in applied:
+        for item in applied if args.format == "text" else ():
             where = "" if item.authored_at == item.joint_path else f" [authored on {item.authored_at}]"
             print(f"{item.joint_path} ({item.instance}){where}: {_summary(item.envelope)}")
     kind = "in place" if args.in_place else "self-contained" if args.flatten else f"a layer over {args.asset}"
     enveloped = sum(1 for record in drives if record.envelope is not None)
+    if args.format == "json":
+        import json
+
+        from drive_envelope._src.io.envelope_file import envelope_to_json
+
+        report = {
+            "output": written,
+            "asset": args.asset,
+            "mode": "in-place" if args.in_place else "flatten" if args.flatten else "layer",
+            "drives": [
+                {
+                    "joint": item.joint_path,
+                    "instance": item.instance,
+                    "authored_at": item.authored_at,
+                    "envelope": json.loads(envelope_to_json(item.envelope)),  # inf as "inf"
+                }
+                for item in applied
+            ],
+            "joint_drives": len(drives),
+            "with_envelope": enveloped,
+        }
+        print(json.dumps(report, indent=2, ensure_ascii=False))
     status(
         f"wrote {len(applied)} drive(s) to {written} ({kind}; reopened: {enveloped} of "
         f"{len(drives)} joint drives have an envelope)"
