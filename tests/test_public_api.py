@@ -133,5 +133,5 @@ def test_cli_parser_loads_no_numpy(argv: list[str]) -> None:
 def test_glossary_is_fresh() -> None:
     """Regenerate docs/glossary.md from the parameter table and find no difference."""
     assert Path(GLOSSARY_PATH).read_text(encoding="utf-8") == render_glossary(), (
-        "run: python -m drive_envelope._src.params.glossary"
+        "run: python -m drive_envelope._src.params.glossary docs/glossary.md"
     )

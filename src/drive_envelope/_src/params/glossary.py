@@ -1,7 +1,8 @@
-"""Generate ``docs/glossary.md`` from the parameter table: ``python -m drive_envelope._src.params.glossary``.
+"""Generate the glossary from the parameter table: ``python -m drive_envelope._src.params.glossary OUT``.
 
-A test compares the committed file with :func:`render_glossary`, so the glossary cannot drift from
-the names the adapters use.
+It writes only where it is told: ``OUT`` (``docs/glossary.md`` in a checkout; ``-`` for stdout), never
+into the installation it runs from. A test compares the committed file with :func:`render_glossary`,
+so the glossary cannot drift from the names the adapters use.
 """
 
 from __future__ import annotations
@@ -11,9 +12,10 @@ from pathlib import Path
 
 from drive_envelope._src.params.table import PARAMETERS
 
-__all__ = ["GLOSSARY_PATH", "render_glossary"]
+__all__ = ["GLOSSARY_PATH", "main", "render_glossary"]
 
 GLOSSARY_PATH = Path(__file__).resolve().parents[4] / "docs" / "glossary.md"
+"""Where a source checkout keeps the glossary (the test reads it; the generator is told where to write)."""
 
 
 def render_glossary() -> str:
@@ -22,7 +24,7 @@ def render_glossary() -> str:
         "# Glossary: one envelope, many names",
         "",
         "Generated from `src/drive_envelope/_src/params/table.py` by",
-        "`python -m drive_envelope._src.params.glossary`; do not edit by hand.",
+        "`python -m drive_envelope._src.params.glossary docs/glossary.md`; do not edit by hand.",
         "",
         "All values are joint side and SI inside drive-envelope. USD stores angular instances per degree.",
         "",
@@ -57,6 +59,23 @@ def render_glossary() -> str:
     return "\n".join(lines)
 
 
+def main(argv: list[str]) -> int:
+    """Write the glossary to ``argv[0]`` (``-``: stdout); return the exit status (2: no output given)."""
+    usage = "usage: python -m drive_envelope._src.params.glossary OUT.md (or - for stdout)"
+    if len(argv) != 1 or not argv[0].strip():
+        sys.stderr.write(f"{usage}\n")
+        return 2
+    if argv[0] == "-":
+        sys.stdout.write(render_glossary())
+        return 0
+    try:  # a plain write: params/ sits below io/ in the layer stack, and this is a developer tool
+        Path(argv[0]).write_text(render_glossary(), encoding="utf-8")
+    except OSError as exc:
+        sys.stderr.write(f"glossary: error: {argv[0]}: cannot write: {exc.strerror or exc}\n")
+        return 2
+    sys.stderr.write(f"wrote {argv[0]}\n")
+    return 0
+
+
 if __name__ == "__main__":
-    GLOSSARY_PATH.write_text(render_glossary(), encoding="utf-8")
-    sys.stdout.write(f"wrote {GLOSSARY_PATH}\n")
+    sys.exit(main(sys.argv[1:]))
