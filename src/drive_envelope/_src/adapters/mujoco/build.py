@@ -1,10 +1,11 @@
 """Build the MuJoCo plugin ``drive_envelope.envelope`` against the installed ``mujoco`` wheel.
 
-Run ``python -m drive_envelope._src.adapters.mujoco.build`` (part of ``make setup``). The wheel
+Run ``drive-envelope mujoco build-plugin`` (``make setup`` runs it through :func:`main`). The wheel
 ships the headers (``mujoco/include``) and the library (``mujoco/libmujoco.so.X.Y.Z``); CMake
 compiles ``plugin/mujoco`` against exactly those and writes the library plus ``build-info.json``
 (the MuJoCo version it was built for) to ``plugin/mujoco/build`` (git-ignored) in a source
-checkout, or to a cache folder for an installed wheel, which ships the sources too.
+checkout, or for an installed wheel (which ships the sources too) to a cache folder of its own per
+MuJoCo version and Python environment, so two environments never load each other's build.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ __all__ = [
     "BUILD_INFO",
     "PluginError",
     "build_plugin",
+    "cache_key",
+    "current_build",
     "default_build_dir",
     "library_name",
     "main",
@@ -34,7 +37,7 @@ __all__ = [
     "plugin_source_dir",
 ]
 
-BUILD_COMMAND = "python -m drive_envelope._src.adapters.mujoco.build"
+BUILD_COMMAND = "drive-envelope mujoco build-plugin"
 """The command that builds the plugin (quoted in every error about a missing or stale build)."""
 BUILD_INFO = "build-info.json"
 """File beside the library that records the MuJoCo version it was built against."""
@@ -77,12 +80,39 @@ def default_build_dir() -> Path:
     """Where the build goes and where :func:`load_plugin` looks.
 
     ``plugin/mujoco/build`` in a source checkout; for an installed wheel (whose site-packages may be
-    read-only) ``$XDG_CACHE_HOME/drive-envelope/mujoco-plugin`` (default ``~/.cache/...``).
+    read-only) ``$XDG_CACHE_HOME/drive-envelope/mujoco-plugin/mujoco-<version>-<env>`` (default
+    ``~/.cache/...``), ``<env>`` a hash of the environment's ``sys.prefix``: a build is never shared
+    between MuJoCo versions or environments.
     """
     if (_checkout_source_dir() / "CMakeLists.txt").is_file():
         return _checkout_source_dir() / "build"
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return cache / "drive-envelope" / "mujoco-plugin"
+    return cache / "drive-envelope" / "mujoco-plugin" / cache_key()
+
+
+def cache_key(prefix: str | None = None, version: str | None = None) -> str:
+    """``mujoco-<version>-<hash of sys.prefix>``: the cache folder of one MuJoCo and environment."""
+    import hashlib
+    from importlib import metadata
+
+    if version is None:
+        try:
+            version = metadata.version("mujoco")  # no import of mujoco itself: this is cheap
+        except metadata.PackageNotFoundError:
+            version = "none"
+    where = os.path.realpath(prefix if prefix is not None else sys.prefix)
+    return f"mujoco-{version}-{hashlib.sha256(where.encode()).hexdigest()[:12]}"
+
+
+def current_build(build_dir: str | os.PathLike[str] | None = None) -> Path | None:
+    """The library of ``build_dir`` if it was built for the installed MuJoCo, else None."""
+    out = Path(build_dir) if build_dir is not None else default_build_dir()
+    library, info = out / library_name(), out / BUILD_INFO
+    try:
+        recorded = json.loads(info.read_text(encoding="utf-8")).get("mujoco_version")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return library if library.is_file() and recorded == mujoco_paths()[2] else None
 
 
 def library_name() -> str:
@@ -127,16 +157,21 @@ def _run(command: list[str], quiet: bool) -> None:
         )
 
 
-def build_plugin(*, build_dir: str | os.PathLike[str] | None = None, quiet: bool = False) -> Path:
+def build_plugin(
+    *, build_dir: str | os.PathLike[str] | None = None, quiet: bool = False, force: bool = True
+) -> Path:
     """Configure and build the plugin with CMake; return the path of the library.
 
     Args:
-        build_dir: Build directory (default ``plugin/mujoco/build``).
+        build_dir: Build directory (default :func:`default_build_dir`).
         quiet: Capture the compiler output and show it only on failure.
+        force: Build even when ``build_dir`` holds a build for the installed MuJoCo (else reuse it).
 
     Raises:
         PluginError: no cmake, no sources, no mujoco wheel, or the build failed.
     """
+    if not force and (built := current_build(build_dir)) is not None:
+        return built
     source = plugin_source_dir()
     if not (source / "CMakeLists.txt").is_file():
         raise PluginError(
@@ -178,9 +213,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--build-dir", default=None, help="build directory (default: plugin/mujoco/build)")
     parser.add_argument("--quiet", action="store_true", help="show compiler output only on failure")
+    parser.add_argument(
+        "--force", action="store_true", help="rebuild even when a build for this MuJoCo exists"
+    )
     args = parser.parse_args(argv)
     try:
-        path = build_plugin(build_dir=args.build_dir, quiet=args.quiet)
+        path = build_plugin(build_dir=args.build_dir, quiet=args.quiet, force=args.force)
     except PluginError as exc:
         print(f"drive-envelope: error: {exc}", file=sys.stderr)
         return 2

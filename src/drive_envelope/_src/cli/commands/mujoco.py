@@ -54,7 +54,26 @@ def register(subparsers: Any) -> None:
     show.add_argument("model", metavar="ROBOT.xml", help="MJCF file to read")
     add_format_argument(show, ("text", "json"), "the drives as a table or as one JSON object (SI)")
     show.set_defaults(func=_show)
+
+    build = actions.add_parser(
+        "build-plugin",
+        help="build the native MuJoCo plugin for the installed mujoco (reused when current)",
+        description="Compile plugin/mujoco with CMake against the installed mujoco wheel's headers and "
+        "library, into plugin/mujoco/build in a checkout or a cache folder per MuJoCo version and "
+        "environment for an installed package; prints the library's path. A current build is reused.",
+    )
+    build.add_argument("--force", action="store_true", help="rebuild even when a current build exists")
+    build.add_argument("--build-dir", default=None, metavar="DIR", help="build folder (default: see above)")
+    build.add_argument("--quiet", action="store_true", help="show the compiler's output only on failure")
+    build.set_defaults(func=_build_plugin)
     parser.set_defaults(func=lambda args: _usage(parser))
+
+
+def _build_plugin(args: argparse.Namespace) -> int:
+    from drive_envelope._src.adapters.mujoco.build import build_plugin
+
+    print(build_plugin(build_dir=args.build_dir, quiet=args.quiet, force=args.force))
+    return 0
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
