@@ -164,12 +164,12 @@ def test_compute_fills_efforts_like_isaac_lab_and_clips_by_the_envelope() -> Non
     """Step as _apply_actuator_model does: computed = PD law, applied = the core clamp at the velocity."""
     import torch
 
-    envelope = {
+    envelope: dict[str, Any] = {
         "max_actuator_velocity": 8.0,
         "velocity_dependent_resistance": 0.3,
         "speed_effort_gradient": 0.5,
     }
-    articulation = _Articulation({"legs": _cfg(effort_limit=12.0, **envelope)})
+    articulation = _Articulation({"legs": _cfg(effort_limit=12.0, clip="start_of_step", **envelope)})
     rng = np.random.default_rng(3)
     shape = (NUM_ENVS, len(JOINTS))
     articulation.joint_pos_target[:] = torch.as_tensor(rng.normal(0.0, 0.5, shape), dtype=torch.float32)
@@ -202,8 +202,13 @@ def test_two_groups_on_joint_subsets_index_their_own_columns() -> None:
 
     articulation = _Articulation(
         {
-            "hips": _cfg(joint_names_expr=[".*_HAA", ".*_HFE"], effort_limit=5.0, max_actuator_velocity=2.0),
-            "knees": _cfg(joint_names_expr=[".*_KFE"], effort_limit=30.0),
+            "hips": _cfg(
+                joint_names_expr=[".*_HAA", ".*_HFE"],
+                effort_limit=5.0,
+                max_actuator_velocity=2.0,
+                clip="start_of_step",
+            ),
+            "knees": _cfg(joint_names_expr=[".*_KFE"], effort_limit=30.0, clip="start_of_step"),
         }
     )
     knees = articulation.actuators["knees"]
@@ -237,6 +242,7 @@ def test_equals_dc_motor_when_driving_and_allows_less_when_braking() -> None:
         effort_limit=max_e,
         max_actuator_velocity=v_lim,
         speed_effort_gradient=v_lim / sat,
+        clip="start_of_step",  # DCMotor's rule: the limit at the velocity the step starts from
     )
     articulation = _Articulation({"dc": dc_cfg}, num_envs=200)
     twin = _Articulation({"envelope": ours_cfg}, num_envs=200)
@@ -270,7 +276,11 @@ def test_event_terms_write_the_envelope_per_environment() -> None:
     from drive_envelope.isaaclab import randomize_actuator_envelope
 
     articulation = _Articulation(
-        {"legs": _cfg(effort_limit=12.0, max_actuator_velocity=8.0, speed_effort_gradient=0.5)}
+        {
+            "legs": _cfg(
+                effort_limit=12.0, max_actuator_velocity=8.0, speed_effort_gradient=0.5, clip="start_of_step"
+            )
+        }
     )
     actuator = articulation.actuators["legs"]
     env_ids = torch.tensor([1, 3])
@@ -325,3 +335,202 @@ def test_facade_import_is_light() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+# -- the end-of-step clip (issue 22): PhysX's rule on the one-joint stand --------------------------
+
+STAND_INERTIA, STAND_DT, STAND_STEPS = 0.05, 0.005, 600  # kg*m^2, s; from rest to a 1 rad target
+
+
+def _stand_reference(envelope: Any, kp: float, kd: float, load: float) -> tuple[Any, Any]:
+    """The stand stepped with the PD request clamped by the PhysX-exact clamp at the end-of-step velocity.
+
+    PhysX integrates the load into the velocity before its solver clamps the drive (v0 below), then
+    q1 = q0 + v1*dt (PGS). Returns the positions and velocities after each step.
+    """
+    q = v = 0.0
+    qs, vs = [], []
+    for _ in range(STAND_STEPS):
+        request = kp * (1.0 - q) - kd * v
+        v0 = v + STAND_DT * load / STAND_INERTIA
+        impulse = de.clamp_drive_impulse(
+            v0,
+            0.0,
+            request * STAND_DT,
+            1.0 / STAND_INERTIA,
+            envelope.max_actuator_velocity,
+            envelope.max_effort * STAND_DT,
+            envelope.speed_effort_gradient / STAND_DT,
+            envelope.velocity_dependent_resistance * STAND_DT,
+            physx_exact=True,
+        )
+        v = v0 + float(impulse) / STAND_INERTIA
+        q += v * STAND_DT
+        qs.append(q)
+        vs.append(v)
+    return np.array(qs), np.array(vs)
+
+
+def _stand_actuator(source: str, kp: float, kd: float, load: float, clip: str) -> tuple[Any, Any]:
+    """The stand with the real actuator: its applied effort plus the load moves the joint for one step."""
+    import torch
+    from isaaclab.utils.types import ArticulationActions
+
+    from drive_envelope.isaaclab import PerformanceEnvelopeActuatorCfg
+
+    cfg = PerformanceEnvelopeActuatorCfg(
+        joint_names_expr=[".*"],
+        stiffness=kp,
+        damping=kd,
+        datasheet=source,
+        clip=clip,
+        effective_inertia=STAND_INERTIA,
+        physics_dt=STAND_DT,
+    )
+    one = torch.zeros((1, 1))
+    actuator = cfg.class_type(
+        cfg=cfg,
+        joint_names=["joint"],
+        joint_ids=slice(None),
+        num_envs=1,
+        device="cpu",
+        stiffness=one,
+        damping=one,
+        armature=one,
+        friction=one,
+        dynamic_friction=one,
+        viscous_friction=one,
+        effort_limit=torch.full((1, 1), math.inf),
+        velocity_limit=torch.full((1, 1), math.inf),
+    )
+    q = v = 0.0
+    qs, vs = [], []
+    for _ in range(STAND_STEPS):
+        action = ArticulationActions(
+            joint_positions=torch.ones((1, 1)),
+            joint_velocities=torch.zeros((1, 1)),
+            joint_efforts=torch.zeros((1, 1)),
+        )
+        out = actuator.compute(action, joint_pos=torch.tensor([[q]]), joint_vel=torch.tensor([[v]]))
+        v += STAND_DT * (float(out.joint_efforts[0, 0]) + load) / STAND_INERTIA
+        q += v * STAND_DT
+        qs.append(q)
+        vs.append(v)
+    return np.array(qs), np.array(vs)
+
+
+# gains that reach each speed line from rest (critically damped on 0.05 kg*m^2)
+STANDS = [
+    ("franka-panda-joint1-4", 80.0, 4.0),
+    ("unitree-go2-calf", 400.0, 9.0),
+    ("unitree-g1-7520-22", 400.0, 9.0),
+]
+
+
+@pytest.mark.parametrize(("source", "kp", "kd"), STANDS)
+@pytest.mark.parametrize("load_share", [0.0, -0.2])
+def test_end_of_step_clip_follows_physx_rule_on_the_stand(
+    source: str, kp: float, kd: float, load_share: float
+) -> None:
+    """Follow the PhysX-exact clamp's trajectory to 0.05 rad, end at the PD rest, stay at the speed line.
+
+    The load holds the joint back with a fifth of max_effort (a load along the motion makes PhysX's
+    own drive let go above the line and run away: the reference itself leaves the stand then).
+    """
+    from drive_envelope.datasheet import resolve_envelope
+
+    envelope = resolve_envelope(source)
+    load = load_share * envelope.max_effort
+    q_ref, v_ref = _stand_reference(envelope, kp, kd, load)
+    q, v = _stand_actuator(source, kp, kd, load, "end_of_step")
+    assert np.max(np.abs(q - q_ref)) <= 0.05
+    assert abs(q[-1] - (1.0 + load / kp)) < 0.01  # the PD law's rest position under the load
+    assert np.mean(np.abs(v) > 1.05 * envelope.max_actuator_velocity) <= 0.01
+    assert np.max(np.abs(v_ref)) >= 0.999 * envelope.max_actuator_velocity  # the stand reaches the line
+
+
+@pytest.mark.parametrize(("source", "kp", "kd"), STANDS)
+def test_start_of_step_clip_runs_away_on_the_stand(source: str, kp: float, kd: float) -> None:
+    """Keep today's clip by name: past the line after one step, it gives 0 and the joint runs away."""
+    q, _ = _stand_actuator(source, kp, kd, 0.0, "start_of_step")
+    assert q[-1] > 10.0
+
+
+def test_end_of_step_clip_is_the_implicit_clamp_of_the_free_velocity() -> None:
+    """Step 0 (rest) is cut to the effort that ends on the line; from above it, a braking request is whole."""
+    import torch
+
+    articulation = _Articulation(
+        {
+            "legs": _cfg(
+                effort_limit=87.0, max_actuator_velocity=2.175, effective_inertia=0.05, physics_dt=0.005
+            )
+        },
+        num_envs=1,
+    )
+    articulation.joint_pos_target[:] = 1.0
+    zero = torch.zeros((1, len(JOINTS)))
+    articulation.apply_actuator_model(zero, zero)
+    # 40 N*m requested; the line at 2.175 rad/s after 5 ms on 0.05 kg*m^2 allows 2.175*0.05/0.005
+    assert articulation.applied_torque[0].tolist() == pytest.approx([21.75] * 6, rel=1e-6)
+    actuator = articulation.actuators["legs"]
+    actuator.reset(slice(None))  # a reset forgets the last step: no velocity change is carried over
+    articulation.joint_pos_target[:] = -1.0
+    fast = torch.full((1, len(JOINTS)), 3.0)
+    articulation.apply_actuator_model(zero, fast)
+    # -40 - 2*3 = -46 N*m brings 3 rad/s to 3 - 46*0.1 = -1.6: inside, given whole
+    assert articulation.applied_torque[0].tolist() == pytest.approx([-46.0] * 6, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"clip": "implicit"}, r"clip = 'implicit'; expected one of 'end_of_step', 'start_of_step'"),
+        ({"effective_inertia": -0.1}, r"effective_inertia: joint 'LF_HAA' is -0\.1"),
+        ({"effective_inertia": {".*_KFE": 0.1}}, r"effective_inertia: joint 'LF_HAA' is not named"),
+        ({"effective_inertia": "2 N*m"}, "effective_inertia"),
+        ({"effective_inertia": 0.1, "physics_dt": 0.0}, r"physics_dt: got 0\.0"),
+    ],
+)
+def test_bad_clip_fields_are_one_line_errors(fields: dict[str, Any], message: str) -> None:
+    """Refuse a bad clip rule, effective inertia or time step with one line naming the field."""
+    with pytest.raises(InputError, match=message):
+        _Articulation({"legs": _cfg(**fields)})
+
+
+def test_end_of_step_without_a_response_says_what_to_set() -> None:
+    """Without effective_inertia or a mass-matrix response, the first compute names the three ways."""
+    import torch
+
+    articulation = _Articulation({"legs": _cfg(physics_dt=0.005)})
+    zero = torch.zeros((NUM_ENVS, len(JOINTS)))
+    with pytest.raises(InputError, match=r"effective_inertia: not given.*clip='start_of_step'"):
+        articulation.apply_actuator_model(zero, zero)
+
+
+@pytest.mark.parametrize("floating", [False, True])
+def test_response_from_the_mass_matrix_is_the_inverse_diagonal(floating: bool) -> None:
+    """Write (M^-1)_ii at each actuator's joints: M = 3 blocks [[2, 1], [1, 1]] has inverse diagonal 1, 2."""
+    import torch
+
+    from drive_envelope.isaaclab import set_response_from_mass_matrix
+
+    articulation = _Articulation(
+        {
+            "hips": _cfg(joint_names_expr=[".*_HAA", ".*_HFE"], physics_dt=0.005),
+            "knees": _cfg(joint_names_expr=[".*_KFE"], physics_dt=0.005),
+        }
+    )
+    block = torch.tensor([[2.0, 1.0], [1.0, 1.0]])
+    joints = torch.block_diag(block, block, block)  # joint order LF_HAA, LF_HFE, LF_KFE, RF_HAA, ...
+    matrix = torch.block_diag(torch.eye(6) * 4.0, joints) if floating else joints
+    view = SimpleNamespace(get_generalized_mass_matrices=lambda: matrix.expand(NUM_ENVS, -1, -1).clone())
+    vars(articulation).update(root_physx_view=view, num_joints=len(JOINTS))  # what PhysX's view gives
+    set_response_from_mass_matrix(articulation)
+    expected = [1.0, 2.0, 1.0, 2.0, 1.0, 2.0]
+    hips, knees = articulation.actuators["hips"], articulation.actuators["knees"]
+    assert hips.response[0].tolist() == pytest.approx([expected[i] for i in (0, 1, 3, 4)])
+    assert knees.response[0].tolist() == pytest.approx([expected[i] for i in (2, 5)])
+    assert hips.response_source == "mass_matrix"
+    zero = torch.zeros((NUM_ENVS, len(JOINTS)))
+    articulation.apply_actuator_model(zero, zero)  # the response is set: no error

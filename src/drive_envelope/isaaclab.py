@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from drive_envelope._src.adapters.isaaclab.actuator import set_response_from_mass_matrix
 from drive_envelope._src.adapters.isaaclab.events import randomize_actuator_envelope
 from drive_envelope._src.adapters.isaaclab.implicit import (
     ImplicitEnvelopeSetup,
@@ -45,6 +46,7 @@ __all__ = [
     "drive_model_properties",
     "envelope_from_drive_model_properties",
     "randomize_actuator_envelope",
+    "set_response_from_mass_matrix",
     "write_envelope_to_sim",
 ]
 

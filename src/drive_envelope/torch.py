@@ -19,12 +19,19 @@ compiles, about a minute). Example::
                                          speed_effort_gradient=0.5, device="cuda:0")
     effort = clamp_effort_implicit(params, requested, qd, response, dt=0.005)   # (num_envs, 2)
 
+An explicit actuator's clip is ``clip_effort(params, effort, velocity, response, dt,
+clip="end_of_step")``: PhysX's implicit clamp at the end-of-step velocity (the default of the Isaac
+Lab and mjlab actuators), or ``clip="start_of_step"``, the limit at the velocity the step starts
+from (``CLIP_RULES``); ``FreeVelocity`` estimates the velocity a step would end with without the
+actuator's effort from the last step (loads, gravity, the other joints).
+
 The Isaac Lab actuator built on these ops is ``drive_envelope.isaaclab.PerformanceEnvelopeActuator``
 (a real ``isaaclab.actuators.IdealPDActuator``); its envelope tensors are ``EnvelopeTensors``.
 """
 
 from __future__ import annotations
 
+from drive_envelope._src.kernels.torch_clip import CLIP_RULES, FreeVelocity, clip_effort
 from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 from drive_envelope._src.kernels.torch_ops import (
     clamp_drive_impulse,
@@ -35,10 +42,13 @@ from drive_envelope._src.kernels.torch_ops import (
 )
 
 __all__ = [
+    "CLIP_RULES",
     "EnvelopeTensors",
+    "FreeVelocity",
     "clamp_drive_impulse",
     "clamp_effort",
     "clamp_effort_implicit",
+    "clip_effort",
     "effort_limit",
     "fused_clamp_drive_impulse",
 ]

@@ -4,9 +4,13 @@ Isaac Lab's explicit actuators compute ``effort = stiffness*(q_target - q) + dam
 + effort_target`` for every environment and joint and clip it (``IdealPDActuator``: to
 ``+-effort_limit``; ``DCMotor``: to a torque-speed line). :class:`PerformanceEnvelopeActuator` is an
 ``IdealPDActuator`` whose clip is the envelope's effort limit at the current joint velocity,
-``L(v) = max(min(effort_limit - R|v|, (v_max - |v|)/G), 0)``, with ``effort_limit`` (Isaac Lab's own
-field) as max_effort. It is an explicit actuator: the clip acts at the velocity the step starts
-from, one step behind PhysX's implicit clamp (``docs/isaaclab.md`` has the implicit path).
+with ``effort_limit`` (Isaac Lab's own field) as max_effort. The clip follows the cfg's ``clip``
+(``kernels/torch_clip.py``): ``"end_of_step"`` (default) is PhysX's implicit clamp at the velocity
+the step will end with, which needs each joint's unit response (the cfg's ``effective_inertia``, or
+:func:`set_response_from_mass_matrix` from the articulation's mass matrix) and the physics ``dt``;
+``"start_of_step"`` is the limit ``L(v) = max(min(effort_limit - R|v|, (v_max - |v|)/G), 0)`` at the
+velocity the step starts from, which runs away after a step that ends beyond the speed line
+(``docs/isaaclab.md``; the implicit path is there too).
 
 The four envelope parameters are ``(num_envs, num_joints)`` tensors on the actuator
 (``effort_limit``, ``max_actuator_velocity``, ``velocity_dependent_resistance``,
@@ -29,7 +33,7 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvel
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.values import read_envelope_value
 
-__all__ = ["ENVELOPE_ATTRIBUTES", "build", "resolve_datasheets", "si_value"]
+__all__ = ["ENVELOPE_ATTRIBUTES", "build", "resolve_datasheets", "set_response_from_mass_matrix", "si_value"]
 
 ENVELOPE_ATTRIBUTES = ("effort_limit", *ENVELOPE_FIELDS[1:])
 """The actuator's envelope tensors in Isaac Lab 2.3, in the order of the envelope fields."""
@@ -82,6 +86,7 @@ def _simulated(limits: Mapping[str, Any], names: Any, like: Any) -> Any:
     if isinstance(given, torch.Tensor):
         return given.to(like).expand_as(like).clone()
     return torch.full_like(like, math.inf if given is None else float(given))
+
 
 _DEFAULTS = {
     "max_actuator_velocity": math.inf,
@@ -146,8 +151,8 @@ def build() -> tuple[type, type]:
     from isaaclab.actuators import IdealPDActuator, IdealPDActuatorCfg
     from isaaclab.utils import configclass
 
+    from drive_envelope._src.kernels.torch_clip import FreeVelocity, check_clip, clip_effort
     from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
-    from drive_envelope._src.kernels.torch_ops import clamp_effort
 
     class PerformanceEnvelopeActuator(IdealPDActuator):  # type: ignore[misc,valid-type]
         """Ideal PD actuator whose effort is clipped by the PhysX drive performance envelope.
@@ -226,6 +231,7 @@ def build() -> tuple[type, type]:
                 self._check(attribute, getattr(self, attribute))
                 setattr(self, f"default_{attribute}", getattr(self, attribute).clone())
             self._joint_vel = torch.zeros_like(self.computed_effort)
+            self._init_clip(cfg)
             self._warn_speed_limit(cfg, names)
 
         @property
@@ -324,9 +330,63 @@ def build() -> tuple[type, type]:
             self._joint_vel[:] = joint_vel
             return super().compute(control_action, joint_pos, joint_vel)
 
-        def _clip_effort(self, effort: Any) -> Any:
-            """``clip(effort, -L(v), L(v))`` at the velocity of this step's :meth:`compute`."""
-            return clamp_effort(self.envelope, effort, self._joint_vel)
+        def _init_clip(self, cfg: Any) -> None:
+            """The clip rule, the unit response (from ``effective_inertia``) and the history it needs."""
+            self.clip = check_clip(cfg.clip, f"{_CFG}.clip")
+            self.physics_dt = None if cfg.physics_dt is None else _time_step(cfg.physics_dt)
+            self.response = torch.full_like(self.computed_effort, math.nan)
+            self.response_source = None
+            """Where ``response`` comes from: ``"effective_inertia"``, ``"mass_matrix"`` or None (unset)."""
+            if cfg.effective_inertia is not None:
+                inertia = self._apply(
+                    "effective_inertia", _inertia_value(cfg.effective_inertia), self.response
+                )
+                self._check_inertia(inertia, cfg.effective_inertia)
+                self.response = 1.0 / inertia
+                self.response_source = "effective_inertia"
+            self._free_velocity = FreeVelocity(self.computed_effort)
+
+        def _check_inertia(self, inertia: Any, given: Any) -> None:
+            """Every joint needs an effective inertia > 0 and finite (a dict must name them all)."""
+            bad = ~((inertia > 0.0) & (inertia < math.inf))
+            if bool(bad.any()):
+                column = int(torch.nonzero(bad)[0][1])
+                value = float(inertia[0, column])
+                what = "is not named" if math.isnan(value) else f"is {value!r}"
+                raise InputError(
+                    f"{_CFG}.effective_inertia: joint {self.joint_names[column]!r} {what}; expected "
+                    f"> 0 and finite [kg*m^2 or kg] for every joint (got {given!r})"
+                )
+
+        def reset(self, env_ids: Any) -> None:
+            """Isaac Lab's reset, and the clip forgets these environments' last step (a reset moves them)."""
+            super().reset(env_ids)
+            self._free_velocity.reset(env_ids)
+
+        def _clip_effort(self, effort: Any, joint_vel: Any = None) -> Any:
+            """The PD effort limited by the envelope with the cfg's ``clip`` rule.
+
+            ``"end_of_step"``: PhysX's clamp at the end-of-step velocity, from the velocity the step
+            would end with without this effort (:class:`FreeVelocity`, from the last step);
+            ``"start_of_step"``: ``clip(effort, -L(v), L(v))`` at this step's velocity.
+            """
+            velocity = self._joint_vel if joint_vel is None else joint_vel
+            if self.clip == "start_of_step":
+                return clip_effort(self.envelope, effort, velocity, clip="start_of_step")
+            if self.response_source is None:
+                raise InputError(
+                    f"{_CFG}.effective_inertia: not given and no mass-matrix response set; "
+                    "clip='end_of_step' needs each joint's unit response: set effective_inertia "
+                    "[kg*m^2 or kg] (1/(M^-1)_ii of the robot's mass matrix at a typical pose), call "
+                    "drive_envelope.isaaclab.set_response_from_mass_matrix(robot) each step, or set "
+                    "clip='start_of_step'"
+                )
+            if self.physics_dt is None:
+                self.physics_dt = _simulation_dt()
+            free = self._free_velocity.predict(velocity, self.response, self.physics_dt)
+            applied = clip_effort(self.envelope, effort, free, self.response, self.physics_dt)
+            self._free_velocity.record(applied)
+            return applied
 
     @configclass
     class PerformanceEnvelopeActuatorCfg(IdealPDActuatorCfg):  # type: ignore[misc,valid-type]
@@ -353,6 +413,91 @@ def build() -> tuple[type, type]:
         datasheet: dict[str, str] | str | None = None
         """Catalog key, datasheet or envelope file giving all four values, or ``{joint regex: source}``."""
 
+        clip: str = "end_of_step"
+        """``"end_of_step"``: PhysX's implicit clamp at the end-of-step velocity (needs the unit
+        response); ``"start_of_step"``: the envelope's limit at the step's start velocity (runs away
+        at the speed line)."""
+
+        effective_inertia: dict[str, float | str] | float | str | None = None
+        """Each joint's effective inertia [kg*m^2 or kg], ``1/(M^-1)_ii`` (or a ``{joint regex: value}``
+        dict naming every joint): the end-of-step clip's unit response is its inverse. None: set
+        the response from the mass matrix (:func:`set_response_from_mass_matrix`)."""
+
+        physics_dt: float | None = None
+        """The physics time step [s]. None: Isaac Lab's ``SimulationContext`` physics dt."""
+
     for cls in (PerformanceEnvelopeActuator, PerformanceEnvelopeActuatorCfg):
         cls.__module__ = "drive_envelope.isaaclab"
     return PerformanceEnvelopeActuatorCfg, PerformanceEnvelopeActuator
+
+
+def _inertia_value(value: Any) -> Any:
+    """The cfg's ``effective_inertia`` in SI: a number or string with units, or a regex dict of them."""
+    from drive_envelope._src.values import read_joint_quantity
+
+    where = f"{_CFG}.effective_inertia"
+    if isinstance(value, Mapping):
+        return {str(k): read_joint_quantity(v, "kg*m^2", "kg", f"{where}[{k!r}]") for k, v in value.items()}
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise InputError(
+            f"{where}: got {value!r}; expected a number [kg*m^2 or kg], a string with units or a "
+            "{joint regex: value} dict"
+        )
+    return read_joint_quantity(value, "kg*m^2", "kg", where)
+
+
+def _time_step(value: Any) -> float:
+    """The cfg's ``physics_dt`` [s], finite and > 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < float(value) < math.inf:
+        raise InputError(f"{_CFG}.physics_dt: got {value!r}; expected a time step > 0 and finite [s]")
+    return float(value)
+
+
+def _simulation_dt() -> float:
+    """Isaac Lab's physics dt [s] from its ``SimulationContext`` (InputError when there is none)."""
+    try:
+        from isaaclab.sim import SimulationContext
+
+        context = SimulationContext.instance()
+    except Exception:  # Isaac Sim missing or not started: say what to set instead
+        context = None
+    if context is None:
+        raise InputError(
+            f"{_CFG}.physics_dt: not set and no Isaac Lab SimulationContext to read it from; "
+            "set physics_dt [s]"
+        )
+    return _time_step(float(context.get_physics_dt()))
+
+
+def set_response_from_mass_matrix(articulation: Any) -> None:
+    """Give every envelope actuator of ``articulation`` its joints' unit response ``(M^-1)_ii``.
+
+    Reads the articulation's joint-space mass matrices from PhysX
+    (``articulation.root_physx_view.get_generalized_mass_matrices()``, ``(num_envs, n, n)``; with a
+    floating base ``n`` is the joint count plus 6, the base's rows first), inverts them (batched
+    ``torch.linalg.inv``) and writes the diagonal at each actuator's joints to its ``response``
+    [1/(kg*m^2) or 1/kg]. Call it every step (e.g. before ``env.step``'s physics steps, or as an
+    interval event) for the response at the current pose, or once for a fixed one.
+
+    Args:
+        articulation: An Isaac Lab ``Articulation`` whose ``actuators`` include
+            :class:`PerformanceEnvelopeActuator` s.
+    """
+    import torch
+
+    _, actuator_class = build()
+    matrices = articulation.root_physx_view.get_generalized_mass_matrices()
+    diagonal = torch.diagonal(torch.linalg.inv(matrices), dim1=-2, dim2=-1)
+    offset = diagonal.shape[-1] - int(articulation.num_joints)
+    if offset not in (0, 6):
+        raise InputError(
+            f"set_response_from_mass_matrix: mass matrices of size {diagonal.shape[-1]} for "
+            f"{articulation.num_joints} joints; expected the joint count, or it plus 6 (floating base)"
+        )
+    for item in articulation.actuators.values():
+        if isinstance(item, actuator_class):
+            actuator: Any = item
+            ids = actuator.joint_indices
+            columns = torch.arange(articulation.num_joints, device=diagonal.device)[ids] + offset
+            actuator.response[:] = diagonal[:, columns].to(actuator.response)
+            actuator.response_source = "mass_matrix"
