@@ -42,6 +42,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.files import read_text
 from drive_envelope._src.io.paths import input_file
 
 __all__ = ["COLUMNS", "BenchLog", "read_bench_log"]
@@ -336,11 +337,12 @@ def _sidecar(file: Path) -> dict[str, Any] | None:
         if file.suffix.lower() != ".gz"
         else file.with_suffix("").with_suffix(".json")
     )
-    if not sidecar.is_file():
+    if not sidecar.exists() and not sidecar.is_symlink():
         return None
+    text = read_text(sidecar)  # a FIFO, /dev/zero or an oversized file beside the log: refused
     try:
-        data: Any = json.loads(sidecar.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        data: Any = json.loads(text)
+    except json.JSONDecodeError as exc:
         raise InputError(
             f"{sidecar}: cannot read the log's JSON sidecar: {' '.join(str(exc).split())}"
         ) from None
