@@ -1,5 +1,9 @@
 """Cost of PerformanceEnvelopeActuator.compute against Isaac Lab's IdealPDActuator and DCMotor.
 
+``envelope`` is the default clip (``"end_of_step"``: PhysX's clamp at the end-of-step velocity, the
+torch port of ``clamp_drive_impulse`` plus the free-velocity estimate), ``env_start`` the
+``"start_of_step"`` clip (the envelope's limit at the velocity the step starts from).
+
 The three actuators are built as Isaac Lab's ``Articulation._process_actuators_cfg`` builds them
 (``(num_envs, num_joints)`` tensors, torch on the CPU unless ``--device cuda``) with the same gains,
 and each ``compute`` gets the same ``ArticulationActions`` and joint state. Rounds alternate the
@@ -63,14 +67,21 @@ def main() -> None:
     from drive_envelope.isaaclab import PerformanceEnvelopeActuatorCfg
 
     gains = {"joint_names_expr": [".*"], "stiffness": 40.0, "damping": 2.0, "effort_limit": 25.0}
+    line = {
+        "max_actuator_velocity": 10.0,
+        "velocity_dependent_resistance": 0.1,
+        "speed_effort_gradient": 0.25,
+    }
     actuators = {
+        # the default clip: PhysX's clamp at the end-of-step velocity (unit response from effective_inertia)
         "envelope": _build(
-            PerformanceEnvelopeActuatorCfg(
-                **gains,
-                max_actuator_velocity=10.0,
-                velocity_dependent_resistance=0.1,
-                speed_effort_gradient=0.25,
-            ),
+            PerformanceEnvelopeActuatorCfg(**gains, **line, effective_inertia=0.05, physics_dt=0.005),
+            args.envs,
+            args.joints,
+            args.device,
+        ),
+        "env_start": _build(  # clip="start_of_step": the limit at the step's start velocity
+            PerformanceEnvelopeActuatorCfg(**gains, **line, clip="start_of_step"),
             args.envs,
             args.joints,
             args.device,
@@ -115,10 +126,11 @@ def main() -> None:
     print(f"compute() on ({args.envs}, {args.joints}) {args.device} tensors, median of {args.rounds} rounds:")
     for name in names:
         print(f"  {name:<9} {median[name] * 1e6:9.1f} us")
-    print(
-        f"  envelope / ideal_pd = {median['envelope'] / median['ideal_pd']:.2f}x, "
-        f"envelope / dc_motor = {median['envelope'] / median['dc_motor']:.2f}x"
-    )
+    for name in ("envelope", "env_start"):
+        print(
+            f"  {name} / ideal_pd = {median[name] / median['ideal_pd']:.2f}x, "
+            f"{name} / dc_motor = {median[name] / median['dc_motor']:.2f}x"
+        )
 
 
 if __name__ == "__main__":

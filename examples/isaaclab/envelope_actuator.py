@@ -107,8 +107,8 @@ def main() -> None:
     gains = {"joint_names_expr": ["joint"], "stiffness": 300.0, "damping": 5.0, "effort_limit": 25.0}
     line = {"max_actuator_velocity": 10.0, "speed_effort_gradient": 10.0 / 40.0}
     dc = build(DCMotorCfg(**gains, saturation_effort=40.0, velocity_limit=10.0), args.envs)
-    envelope = build(PerformanceEnvelopeActuatorCfg(**gains, **line), args.envs)
-    randomized = build(PerformanceEnvelopeActuatorCfg(**gains, **line), args.envs)
+    envelope = build(PerformanceEnvelopeActuatorCfg(**gains, **line, clip="start_of_step"), args.envs)
+    randomized = build(PerformanceEnvelopeActuatorCfg(**gains, **line, clip="start_of_step"), args.envs)
     torch.manual_seed(0)
     scene = SimpleNamespace(scene={"robot": SimpleNamespace(actuators={"joint": randomized})})
     randomize_actuator_envelope(
