@@ -331,11 +331,12 @@ def test_outputs_are_checked_before_the_search(
     main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
 ) -> None:
     stand, logs = bench
-    for flag, name in (("-o", "missing/e.toml"), ("--plot", "missing/e.png")):
+    (stand.parent / "plain").write_text("x", encoding="utf-8")  # a file where a folder should be
+    for flag, name in (("-o", "plain/e.toml"), ("--plot", "plain/e.png")):
         target = str(stand.parent / name)
         argv = ["identify", str(logs[0]), "--stand", str(stand), flag, target]
         assert main(argv) == 2
-        assert "cannot write: folder" in capsys.readouterr().err
+        assert "cannot write: " in (err := capsys.readouterr().err) and "is a file, not a folder" in err
 
 
 def test_zero_generations_and_unknown_stand_keys(
