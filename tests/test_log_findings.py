@@ -202,7 +202,7 @@ def test_curve_reader_keeps_reading_units_with_the_same_helper(
     assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(0.82)
     bad = write(tmp_path / "bad.csv", "speed [N*m],torque [mNm]\n0,820\n2500,760\n5000,700\n")
     err = one_line_error(*run(["fit", "--from-curve", str(bad)], capsys)[::2])
-    assert "column 'speed': unit 'N*m' is not an angular speed" in err
+    assert "column 'speed [N*m]': unit 'N*m' is not an angular speed" in err
 
 
 # -- 2. time that goes back: episodes, counted and said ------------------------------------------

@@ -1,10 +1,12 @@
 """Reading points digitized from a datasheet's operating diagram (a torque-speed curve).
 
-The file is a small CSV with a header. A column's unit may follow its name in brackets or
-parentheses, as digitizing tools and datasheets write them (``speed [rpm]``, ``torque (mNm)``); a
-column without a unit is SI. Headers are read by :mod:`.log_units`, as the logs of ``check`` and
-``fit`` are. The points must be joint side: convert motor-side curves through the
-gear first (speed / ratio, torque * ratio * efficiency).
+The file is a small CSV with a header, read by the one log reader of ``check`` and ``fit``
+(:func:`~.logs.read_log`: the delimiters ``,``, ``;`` and tab, ``#`` comments, the row checks). A
+column's unit may follow its name in brackets or parentheses, as digitizing tools and datasheets
+write them (``speed [rpm]``, ``torque (mNm)``); a column without a unit is SI (:mod:`.log_units`).
+Only the choice of columns is the curve's own: ``speed``/``torque``/``force`` are accepted for the
+default names. The points must be joint side: convert motor-side curves through the gear first
+(speed / ratio, torque * ratio * efficiency).
 
     speed [rpm],torque [mNm]
     0,820
@@ -18,15 +20,16 @@ points stored as ``[losses] operating_points`` (see :mod:`.fit_choice`).
 
 from __future__ import annotations
 
-import csv
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
-from drive_envelope._src.analysis.logs import LogColumns
+from drive_envelope._src.analysis.log_csv import csv_header
+from drive_envelope._src.analysis.log_units import find_columns, split_header
+from drive_envelope._src.analysis.logs import LogColumns, ReadEngine, read_log
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import input_file
@@ -38,11 +41,6 @@ VELOCITY_ALIASES = ("velocity", "speed", "omega", "v")
 """Column names accepted for the velocity of a curve when the default column name is absent."""
 EFFORT_ALIASES = ("effort", "torque", "force", "tau")
 """Column names accepted for the effort of a curve when the default column name is absent."""
-
-
-def _split_header(cell: str) -> tuple[str, str]:
-    name, unit = split_header(cell)
-    return name.lower(), unit
 
 
 def _find(
@@ -68,7 +66,11 @@ def _find(
 
 
 def read_curve(
-    path: str | os.PathLike[str], *, columns: LogColumns | None = None, joint: JointType = "revolute"
+    path: str | os.PathLike[str],
+    *,
+    columns: LogColumns | None = None,
+    joint: JointType = "revolute",
+    engine: ReadEngine = "auto",
 ) -> tuple[FloatArray, FloatArray]:
     """Read digitized curve points and convert them to SI, joint side.
 
@@ -77,54 +79,30 @@ def read_curve(
         columns: Column names (``velocity`` and ``effort``); with the defaults, ``speed``/``torque``/
             ``force`` are accepted too.
         joint: Joint type, which fixes the SI units: rad/s and N*m, or m/s and N.
+        engine: CSV reader of :func:`~.logs.read_log` (``"auto"``, ``"pyarrow"``, ``"python"``).
 
     Returns:
         ``(velocity [rad/s or m/s], effort [N*m or N])``.
 
     Raises:
-        InputError: missing file or column, an unknown unit, a cell that is not a number.
+        InputError: missing file or column, an unknown unit, a cell that is not a number (the
+            messages of :func:`~.logs.read_log`), fewer than 3 points.
     """
     columns = columns or LogColumns()
     file = Path(path)
     label = str(file)
     input_file(file, label)  # a FIFO, a device (/dev/zero) or a file over the text cap: refused unopened
-    try:
-        with open(file, encoding="utf-8-sig", newline="") as handle:
-            rows = [
-                row for row in csv.reader(line for line in handle if not line.lstrip().startswith("#")) if row
-            ]
-    except FileNotFoundError:
-        raise InputError(f"{label}: no such file") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:  # csv.Error: a field over its size limit
-        raise InputError(f"{label}: cannot read: {' '.join(str(exc).split())}") from None
-    if not rows:
-        raise InputError(
-            f"{label}: empty file (expected a header such as 'speed [rpm],torque [mNm]' and points)"
+    # the role-to-column plan: the header is read as check reads it (delimiter, comments, units),
+    # the curve's aliases (speed, torque) pick the names, and the one log reader reads the rows
+    header = csv_header(file, label)[1] if file.suffix.lower() not in (".parquet", ".pq", ".json") else []
+    plan = columns
+    if header:
+        v_col = _find(
+            header, columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
         )
-    header = [_split_header(cell) for cell in rows[0]]
-    names = [name for name, _ in header]
-    v_col = _find(
-        rows[0], columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
-    )
-    e_col = _find(rows[0], columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
-    scales = []
-    for col, role in ((v_col, "velocity"), (e_col, "effort")):
-        name, unit = header[col]
-        scales.append(column_scale(role, unit, joint, f"{label}: column {name!r}")[0])
-    values = np.empty((len(rows) - 1, 2))
-    for row_number, row in enumerate(rows[1:], start=1):
-        for out, col in enumerate((v_col, e_col)):
-            cell = row[col] if col < len(row) else ""
-            try:
-                values[row_number - 1, out] = float(cell)
-            except ValueError:
-                what = "an empty cell" if not cell.strip() else repr(cell)
-                raise InputError(
-                    f"{label}: row {row_number}, column {names[col]!r}: got {what}; expected a number"
-                ) from None
-    if not np.isfinite(values).all():
-        bad = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
-        raise InputError(f"{label}: row {bad + 1}: NaN or infinite value; expected finite numbers")
-    if values.shape[0] < 3:
-        raise InputError(f"{label}: {values.shape[0]} points; a curve needs at least 3")
-    return values[:, 0] * scales[0], values[:, 1] * scales[1]
+        e_col = _find(header, columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
+        plan = replace(columns, velocity=header[v_col], effort=header[e_col])
+    chunk = read_log(file, replace(plan, time=None, joint=None, joint_type=joint), engine=engine)
+    if len(chunk) < 3:
+        raise InputError(f"{label}: {len(chunk)} points; a curve needs at least 3")
+    return chunk.velocity, chunk.effort
