@@ -140,10 +140,13 @@ def test_importing_plots_does_not_import_matplotlib() -> None:
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-def test_plot_to_missing_folder_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """A figure path in a missing folder exits 2 with one line."""
-    assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "missing" / "fig.png")]) == 2
+def test_plot_below_a_file_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A figure path below a file (not a folder) exits 2 with one line; a missing folder is made."""
+    (tmp_path / "plain").write_text("x", encoding="utf-8")
+    assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "plain" / "fig.png")]) == 2
     assert "cannot write" in capsys.readouterr().err
+    assert main(["plot", str(SCENARIO), "-o", str(tmp_path / "missing" / "fig.png")]) == 0
+    assert (tmp_path / "missing" / "fig.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_names_from_files_are_drawn_literally(tmp_path: Path) -> None:
