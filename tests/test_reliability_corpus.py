@@ -104,7 +104,7 @@ GENERATED: dict[str, Callable[[Path], None]] = {
     "long_value_map.toml": _long_value_map,
     "many_points.toml": _many_points,
     **{f"fifo.{suffix}": _fifo for suffix in ("toml", "json", "csv", "usda", "xml")},
-    **{f"endless.{suffix}": _endless for suffix in ("toml", "json", "csv", "usda", "xml")},
+    **{f"endless.{suffix}": _endless for suffix in ("toml", "json", "csv", "usda", "xml", "parquet")},
 }
 """Inputs built at test time (``generated/NAME``): too large or binary to keep in the repository."""
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
+from drive_envelope._src.io.paths import input_file
 
 __all__ = ["METADATA_KEY", "have_parquet", "read_parquet", "write_parquet"]
 
@@ -73,8 +74,7 @@ def read_parquet(
             numeric, or a value is not finite.
     """
     pa, pq = _pyarrow(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
+    input_file(path, max_bytes=None)  # a FIFO or a device is refused before pyarrow opens it
     try:
         schema = pq.read_schema(path)
         missing = [column for column in names if column not in schema.names]
