@@ -1,7 +1,9 @@
 """Finding and loading the built plugin library into the running MuJoCo (idempotent).
 
 The library is looked up at ``$DRIVE_ENVELOPE_MUJOCO_PLUGIN`` (a file) or in the default build
-directory ``plugin/mujoco/build``. Before it is loaded, the MuJoCo version recorded at build time
+directory (``plugin/mujoco/build`` in a checkout, else the cache folder of this MuJoCo version and
+environment: :func:`~drive_envelope._src.adapters.mujoco.build.default_build_dir`), where
+``drive-envelope mujoco build-plugin`` puts it. Before it is loaded, the MuJoCo version recorded at build time
 is compared with the installed one: a stale build gives a :class:`PluginError` naming the command
 to run, never a crash from reading another version's ``mjModel`` layout.
 """
