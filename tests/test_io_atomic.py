@@ -223,3 +223,21 @@ def test_socket_and_long_names_are_refused(tmp_path: Path) -> None:
     with pytest.raises(InputError, match=r"a name in this path is 300 bytes long; .* at most 255"):
         atomic_write_text(tmp_path / ("a" * 296 + ".csv"), "x")
     assert [p.name for p in tmp_path.iterdir()] == ["s.csv"]
+
+
+def test_dev_stdout_redirected_to_a_file_keeps_the_shell_redirection(tmp_path: Path) -> None:
+    """``-o /dev/stdout >> log`` appends through the descriptor; the file is neither replaced nor cut."""
+    log = tmp_path / "log.csv"
+    log.write_text("kept\n", encoding="utf-8")
+    inode = log.stat().st_ino
+    code = (
+        "from drive_envelope._src.io.atomic import atomic_write_text\n"
+        "atomic_write_text('/dev/stdout', 'new\\n')\n"
+    )
+    with open(log, "a", encoding="utf-8") as handle:
+        result = subprocess.run(
+            [sys.executable, "-c", code], stdout=handle, stderr=subprocess.PIPE, text=True
+        )
+    assert result.returncode == 0, result.stderr
+    assert log.read_text(encoding="utf-8") == "kept\nnew\n" and log.stat().st_ino == inode
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]

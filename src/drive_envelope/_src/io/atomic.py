@@ -29,6 +29,7 @@ import fcntl
 import os
 import signal
 import stat
+import sys
 import tempfile
 import threading
 from collections.abc import Iterator
@@ -75,8 +76,12 @@ def check_writable(path: str | os.PathLike[str], *, force: bool = False) -> None
 def _stream_kind(shown: Path) -> str | None:
     """What ``shown`` is when it is a FIFO or a character device (written through), else None.
 
-    None for a regular or missing file; a block device or a socket is refused.
+    None for a regular or missing file; a block device or a socket is refused. ``/dev/stdout``,
+    ``/dev/stderr`` and ``/dev/fd/N`` are always written through their open descriptor, whatever it
+    is: replacing the file a shell redirected stdout to (``> run.csv``, ``>> log``) would lose it.
     """
+    if _descriptor(shown) is not None:
+        return "an open file descriptor"
     try:
         # os.stat follows every link, /dev/stdout's /proc/self/fd/1 (a pipe, a terminal) included
         mode = os.stat(shown).st_mode
@@ -238,8 +243,34 @@ def _streamed(shown: Path, kind: str) -> Iterator[Path]:
             tmp.unlink()
 
 
+def _descriptor(shown: Path) -> int | None:
+    """The descriptor ``shown`` names (``/dev/stdout`` 1, ``/dev/fd/3`` 3), or None for other paths."""
+    text = os.fspath(shown)
+    named = {"/dev/stdout": 1, "/dev/stderr": 2}
+    if text in named:
+        return named[text]
+    for prefix in ("/dev/fd/", "/proc/self/fd/"):
+        if text.startswith(prefix) and text[len(prefix) :].isdigit():
+            return int(text[len(prefix) :])
+    return None
+
+
+def _write_all(out: int, tmp: Path) -> None:
+    with open(tmp, "rb") as source:
+        while block := source.read(1 << 20):
+            view = memoryview(block)
+            while view:
+                view = view[os.write(out, view) :]
+
+
 def _copy_into(tmp: Path, shown: Path, kind: str) -> None:
     """Write the bytes of ``tmp`` through ``shown`` (a FIFO or a character device), never replacing it."""
+    descriptor = _descriptor(shown)
+    if descriptor is not None:  # the process's own stream: its offset and O_APPEND are kept
+        if descriptor == 1:
+            sys.stdout.flush()  # anything the command printed goes first
+        _write_all(descriptor, tmp)
+        return
     try:
         # O_NONBLOCK: a FIFO without a reader fails at once (ENXIO) instead of waiting for ever
         out = os.open(shown, os.O_WRONLY | os.O_NONBLOCK)
@@ -252,11 +283,7 @@ def _copy_into(tmp: Path, shown: Path, kind: str) -> None:
     try:
         flags = fcntl.fcntl(out, fcntl.F_GETFL)
         fcntl.fcntl(out, fcntl.F_SETFL, flags & ~os.O_NONBLOCK)  # now block as a plain write would
-        with open(tmp, "rb") as source:
-            while block := source.read(1 << 20):
-                view = memoryview(block)
-                while view:
-                    view = view[os.write(out, view) :]
+        _write_all(out, tmp)
     finally:
         os.close(out)
 
