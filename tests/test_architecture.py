@@ -122,6 +122,28 @@ def test_no_import_cycle() -> None:
     assert not cycles, "\n".join(cycles)
 
 
+def _imported_packages(path: Path) -> set[str]:
+    """Top-level names of every package ``path`` imports, lazy imports included."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            found.add(node.module.split(".")[0])
+        elif isinstance(node, ast.Import):
+            found.update(alias.name.split(".")[0] for alias in node.names)
+    return found
+
+
+def test_matplotlib_is_imported_only_under_plots() -> None:
+    """Figures are built in plots/ (issue 29): the layers beside it pass data, the CLI calls plots/."""
+    plots = PRIVATE / "plots"
+    outside = [
+        str(path.relative_to(SRC))
+        for path in sorted(SRC.rglob("*.py"))
+        if "matplotlib" in _imported_packages(path) and not path.is_relative_to(plots)
+    ]
+    assert not outside, f"matplotlib imported outside _src/plots: {outside}"
+
+
 @pytest.mark.parametrize("engine", ["mujoco", "mjwarp", "mjlab", "newton", "physx", "usd", "isaaclab"])
 def test_each_engine_lives_in_one_adapter_package(engine: str) -> None:
     """Find an engine's code in one folder: nothing outside adapters/<engine> imports the engine."""

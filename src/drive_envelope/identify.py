@@ -27,11 +27,11 @@ from drive_envelope._src.identify.logs import BenchLog, read_bench_log
 from drive_envelope._src.identify.optimize import SearchOptions, SearchProgress, SearchResult
 from drive_envelope._src.identify.parameters import DEFAULT_FIT, PARAMETERS
 from drive_envelope._src.identify.playback import Playback, replay_logs
-from drive_envelope._src.identify.plot import identification_figure, save_identification_figure
 from drive_envelope._src.identify.report import identification_text, identification_to_dict
 from drive_envelope._src.identify.run import Estimate, Identification, LogError, identify
 from drive_envelope._src.identify.stand import IdentifyStand, read_stand
 from drive_envelope._src.identify.stand_file import save_stand
+from drive_envelope._src.plots.identification import identification_figure, save_identification_figure
 
 __all__ = [
     "DEFAULT_FIT",

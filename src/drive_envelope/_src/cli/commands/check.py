@@ -86,8 +86,9 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.api import check_log
     from drive_envelope._src.analysis.check import CheckOptions
     from drive_envelope._src.analysis.options import columns_from_args
-    from drive_envelope._src.analysis.text import check_warnings, format_check, plot_check
+    from drive_envelope._src.analysis.text import check_warnings, format_check
     from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.plots.check import plot_check
     from drive_envelope._src.plots.figure import check_figure_path
 
     if checked_output(args.plot, "--plot") is not None:

@@ -205,7 +205,7 @@ def _run(args: argparse.Namespace) -> int:
 
         save_envelope(result.envelope, envelope_output, force=args.force)
     if plot is not None:
-        from drive_envelope._src.identify.plot import save_identification_figure
+        from drive_envelope._src.plots.identification import save_identification_figure
 
         save_identification_figure(result, plot, force=args.force)
     if args.format == "json":
