@@ -31,7 +31,7 @@ from __future__ import annotations
 import contextlib
 import math
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -39,14 +39,16 @@ from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.chain import ChainScenario
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 from drive_envelope._src.scenario.schedule import DriveSchedule
-from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.spec import JointSpec, Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["MIN_INERTIA", "stand_spec", "simulate"]
+__all__ = ["MIN_INERTIA", "chain_spec", "simulate", "simulate_chain", "stand_spec"]
 
 MIN_INERTIA = 1e-15
 """Smallest inertia [kg*m^2 or kg] MuJoCo accepts for a moving body (its ``mjMINVAL``)."""
@@ -281,3 +283,131 @@ def _metadata(scenario: Scenario) -> dict[str, object]:
         "note": note,
         "unlimited_effort": math.isinf(scenario.drive.max_effort),
     }
+
+
+# -- chains -------------------------------------------------------------------------------------------
+
+
+def chain_spec(scenario: ChainScenario) -> tuple[mujoco.MjSpec, list[MjDrive]]:
+    """A chain scenario as an ``MjSpec``: nested bodies, a plugin drive on every joint, PhysX's solver.
+
+    Each joint's body sits at its ``origin`` in its parent's body, with the link's mass, centre of
+    mass and principal inertia; gravity is along -Z; Euler integration. The plugin iterates the
+    drives as the scenario's PhysX solver does (``set_solver(spec, solver, position_iterations=,
+    velocity_iterations=)``).
+    """
+    import mujoco
+
+    from drive_envelope._src.adapters.mujoco.solver import set_solver
+
+    spec = mujoco.MjSpec()
+    spec.modelname = scenario.name or "chain"
+    sim = scenario.simulation
+    spec.option.timestep = sim.dt
+    spec.option.gravity = [0.0, 0.0, -sim.gravity]
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    bodies: list[Any] = []
+    drives = []
+    for joint in scenario.joints:
+        parent = spec.worldbody if joint.parent < 0 else bodies[joint.parent]
+        body = parent.add_body(name=joint.name, pos=list(joint.origin), explicitinertial=True)
+        body.mass, body.ipos, body.inertia = joint.mass, list(joint.com), list(joint.inertia)
+        bodies.append(body)
+        axis = [0.0, 0.0, 0.0]
+        axis[joint.axis_index] = 1.0
+        kind = mujoco.mjtJoint.mjJNT_HINGE if joint.type == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
+        mj_joint = body.add_joint(name=joint.name, type=kind, axis=axis)
+        mj_joint.armature = joint.armature
+        friction = joint.friction
+        if friction.static_friction != friction.dynamic_friction:
+            raise InputError(
+                f"joint {joint.name!r}: key 'friction.static_friction': the mujoco engine has one Coulomb "
+                "friction (frictionloss) and needs it equal to friction.dynamic_friction"
+            )
+        mj_joint.damping = [friction.viscous_friction, 0.0, 0.0]
+        mj_joint.frictionloss = friction.dynamic_friction
+        mj_joint.solref_friction = [2.0 * sim.dt, 1.0]
+        mj_joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
+        envelope = joint.effective_envelope()
+        unlimited = envelope is None or joint.drive.max_effort == 0.0
+        off = joint.drive.max_effort == 0.0
+        drive = add_drive(
+            spec,
+            joint.name,
+            envelope=envelope if not unlimited else PerformanceEnvelope(max_effort=0.0, joint=joint.type),
+            stiffness=0.0 if off else joint.drive.stiffness,
+            damping=0.0 if off else joint.drive.damping,
+            drive_type=joint.drive.type,
+            inputs=("pos", "vel", "ff"),
+            name=f"{joint.name}_drive",
+            effort_sensor=False,
+        )
+        if unlimited:
+            actuator = spec.actuator(drive.name)
+            actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
+        drives.append(drive)
+    set_solver(spec, sim.solver, position_iterations=sim.position_iterations,
+               velocity_iterations=sim.velocity_iterations)  # fmt: skip
+    return spec, drives
+
+
+def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
+    """Run a chain scenario in MuJoCo with the plugin on every joint; row 0 the initial state.
+
+    Raises:
+        InputError: a scenario MuJoCo cannot represent, or a diverging simulation.
+    """
+    import mujoco
+
+    spec, drives = chain_spec(scenario)
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    where = f"scenario {scenario.name!r}" if scenario.name else "scenario"
+    try:
+        model = spec.compile()
+    except ValueError as exc:
+        raise InputError(f"{where}: MuJoCo cannot build the chain: {' '.join(str(exc).split())}") from None
+    data = mujoco.MjData(model)
+    joints = scenario.joints
+    qpos = [int(model.jnt_qposadr[model.joint(j.name).id]) for j in joints]
+    dof = [int(model.jnt_dofadr[model.joint(j.name).id]) for j in joints]
+    for joint, qi, di, drive in zip(joints, qpos, dof, drives, strict=True):
+        data.qpos[qi], data.qvel[di] = joint.initial_position, joint.initial_velocity
+        data.qfrc_applied[di] = joint.load.external_effort
+        drive.set_targets(model, data, position=joint.drive.target_position,
+                          velocity=joint.drive.target_velocity, effort=joint.load.applied_effort)  # fmt: skip
+    count, n = scenario.simulation.steps, len(joints)
+    position, velocity, effort = np.zeros((count + 1, n)), np.zeros((count + 1, n)), np.zeros((count + 1, n))
+    position[0], velocity[0] = data.qpos[qpos], data.qvel[dof]
+    actuators = [model.actuator(drive.name).id for drive in drives]
+    proxy = Scenario(joint=JointSpec(inertia=1.0), name=scenario.name)  # names the scenario in errors
+    with _quiet_warnings():
+        for i in range(1, count + 1):
+            mujoco.mj_step(model, data)
+            _raise_on_warning(proxy, data, i)
+            position[i], velocity[i], effort[i] = (
+                data.qpos[qpos],
+                data.qvel[dof],
+                data.actuator_force[actuators],
+            )
+    sim = scenario.simulation
+    return ChainTrajectory(
+        time=np.arange(count + 1, dtype=np.float64) * sim.dt,
+        position=position,
+        velocity=velocity,
+        effort=effort,
+        joints=scenario.names,
+        types=tuple(joint.type for joint in joints),
+        engine="mujoco",
+        name=scenario.name,
+        metadata={
+            "solver": sim.solver,
+            "dt": sim.dt,
+            "position_iterations": sim.position_iterations,
+            "velocity_iterations": sim.velocity_iterations,
+            "mujoco_version": str(mujoco.__version__),
+            "integrator": "Euler",
+            "plugin": "drive_envelope.envelope",
+            "plugin_solver": sim.solver,
+            "effort_source": "the plugin's actuator force (drive + applied effort)",
+        },
+    )

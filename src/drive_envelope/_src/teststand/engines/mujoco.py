@@ -6,11 +6,13 @@ and the built plugin (``python -m drive_envelope._src.adapters.mujoco.build``).
 
 from __future__ import annotations
 
+from drive_envelope._src.scenario.chain import ChainScenario
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["LOADS", "simulate"]
+__all__ = ["LOADS", "simulate", "simulate_chain"]
 
 LOADS = ("pendulum", "friction", "armature")
 """The bench loads this engine represents (see :mod:`drive_envelope._src.teststand.engines`)."""
@@ -28,3 +30,10 @@ def simulate(scenario: Scenario, schedule: DriveSchedule | None = None) -> Traje
     from drive_envelope._src.adapters.mujoco.stand import simulate as run
 
     return run(scenario, schedule=schedule)
+
+
+def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
+    """Run a chain scenario in MuJoCo: the plugin on every joint, iterating as the scenario's PhysX solver."""
+    from drive_envelope._src.adapters.mujoco.stand import simulate_chain as run
+
+    return run(scenario)
