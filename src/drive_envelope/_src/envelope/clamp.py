@@ -273,7 +273,7 @@ def _clamp_blocks(args: list[Array], shape: tuple[int, ...], *, exact: bool) -> 
     as whether any bound is NaN, pick between formulas that agree wherever both apply), so the
     blocks give the same bits as one call.
     """
-    flat = []
+    flat: list[Array] = []
     for a in args:
         if a.size == 1:
             flat.append(a.reshape(()))  # a 0-d operand broadcasts in every block
