@@ -4,7 +4,8 @@ Sections (each skipped when its package is missing; the GPU rows only when CUDA 
 
 * NumPy reference: explicit ``clamp_effort`` and implicit ``clamp_drive_impulse`` (default mode
   and ``physx_exact=True``, float64 and float32) / ``clamp_effort_implicit`` against ``np.clip`` of
-  the same arrays (goals: explicit <= 15x, implicit <= 10x: five arrays read, one written, floor ~3x). ``--baseline MODULE`` times another
+  the same arrays (goals: explicit <= 15x, implicit <= 10x: five arrays read, one written, floor
+  ~3x). ``--baseline MODULE`` times another
   implementation's ``clamp_effort``, ``clamp_drive_impulse`` and ``clamp_effort_implicit`` (same
   signatures; e.g. the previous release's ``envelope/clamp.py`` copied under another name) in the
   same interleaved rounds and prints ours over it.
