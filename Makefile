@@ -11,7 +11,7 @@ EXTRAS ?= test,all,isaaclab
 ISAACLAB ?= isaaclab==2.3.2.post1
 STAMP := $(VENV)/.installed-$(subst ,,$(EXTRAS))
 
-.PHONY: setup demo test lint typecheck pytest test-mjlab bench clean
+.PHONY: setup demo test lint typecheck pytest test-mjlab test-isaaclab3 bench clean
 
 # the demo needs the core and matplotlib only; the full set-up (a superset) marks it done too, so
 # `make test` then `make demo` installs nothing, and `make demo` then `make test` adds the engines
@@ -63,10 +63,14 @@ pytest: setup
 test-mjlab: setup
 	PYTHON=$(PYTHON) scripts/test_mjlab.sh
 
-test: lint typecheck pytest test-mjlab
+# Isaac Lab 3.0 pins Python 3.12, torch 2.11 and newton 1.6.1: its tests run in .venv-isaaclab3 (2.3 stays in .venv)
+test-isaaclab3: setup
+	scripts/test_isaaclab3.sh
+
+test: lint typecheck pytest test-mjlab test-isaaclab3
 
 bench: setup
 	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) .venv-mjlab build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
+	rm -rf $(VENV) .venv-mjlab .venv-isaaclab3 build dist .pytest_cache .mypy_cache .ruff_cache plugin/mujoco/build
