@@ -208,11 +208,61 @@ def write(rows: Sequence[Row]) -> None:
     DOC.write_text(head + render(rows) + rest.split(END, 1)[1], encoding="utf-8")
 
 
+CHAINS = sorted((Path(__file__).resolve().parent.parent / "examples" / "scenarios" / "chains").glob("*.toml"))
+"""The multi-DOF scenarios of the robot-scale table (``--chains``)."""
+
+
+def _release(effort: object, max_effort: float) -> int:
+    """First step at which a joint's drive effort is 0 (|effort| < 1e-4 * max_effort): it let go."""
+    import numpy as np
+
+    hits = np.flatnonzero(np.abs(np.asarray(effort)[1:]) < 1e-4 * max_effort)
+    return int(hits[0]) + 1 if hits.size else -1
+
+
+def chain_rows(engines: Sequence[str]) -> str:
+    """The robot-scale table: per chain scenario and engine, against real PhysX, on the first joint.
+
+    Each row: max |dv| over every joint before the first joint lets go, its release step (PhysX's
+    beside), max |dv| after. PhysX's drive effort is recovered from its joint states.
+    """
+    import numpy as np
+
+    from drive_envelope._src.scenario.chain import load_stand
+    from drive_envelope._src.teststand.engines import simulate
+
+    lines = [
+        "| scenario | engine | max \\|dv\\| before release [rad/s] | release step (physx) | "
+        "max \\|dv\\| after [rad/s] |",
+        "|---|---|---|---|---|",
+    ]
+    for path in CHAINS:
+        scenario = load_stand(path)
+        physx = simulate(scenario, "physx")
+        limit = scenario.joints[0].drive.max_effort
+        released = _release(physx.effort[:, 0], limit)
+        for engine in engines:
+            run = simulate(scenario, engine)
+            dv = np.abs(run.velocity - physx.velocity).max(axis=1)
+            own = _release(run.effort[:, 0], limit)
+            lines.append(
+                f"| {scenario.name} | {engine} | {dv[:released].max():.2g} | {own} ({released}) | "
+                f"{dv[released:].max():.2g} |"
+            )
+    return "\n".join(lines).replace("\\\\", "\\")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="write the table into docs/parity.md")
     parser.add_argument("--engines", default=",".join(ENGINES), help="comma-separated engines")
+    parser.add_argument(
+        "--chains", action="store_true", help="print the robot-scale table (multi-DOF chains vs real PhysX)"
+    )
     args = parser.parse_args()
+    if args.chains:
+        print(chain_rows(["reference", *(["mujoco"] if available("mujoco") else [])]))
+        return
     engines = [name for name in args.engines.split(",") if name]
     missing = [name for name in engines if not available(name)]
     if missing:
