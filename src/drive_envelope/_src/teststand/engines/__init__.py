@@ -184,7 +184,7 @@ def simulate(
     """Run ``scenario`` on ``engine`` and return its trajectory.
 
     A :class:`~drive_envelope._src.scenario.chain.ChainScenario` runs on the engines whose module
-    has ``simulate_chain`` (reference, physx) and gives a
+    has ``simulate_chain`` (reference, physx, mujoco) and gives a
     :class:`~drive_envelope._src.scenario.chain_trajectory.ChainTrajectory`.
 
     Args:
@@ -208,7 +208,7 @@ def simulate(
         if not hasattr(module, "simulate_chain"):
             raise InputError(
                 f"--engine {engine}: this engine does not run chain scenarios ([[joints]]) yet; "
-                "run it on reference or physx"
+                "run it on reference, physx or mujoco"
             )
         import inspect
 
