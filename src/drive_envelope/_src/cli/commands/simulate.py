@@ -29,7 +29,8 @@ def register(subparsers: Any) -> None:
         help="simulate one actuated joint with the PhysX drive and envelope",
         description=(
             "Run a test-stand scenario (one joint, fixed base, rigid inertia; or a chain of links with a "
-            "[[joints]] list, engines reference, physx and mujoco) and write time, position, velocity and the "
+            "[[joints]] list, engines reference, physx and mujoco) and write time, position, velocity and "
+            "the "
             "step-average total actuator effort (SI) as CSV, JSON or Parquet. A run of "
             "more than --max-steps steps is refused before it starts; long runs show their progress on "
             "stderr when it is a terminal."
