@@ -31,7 +31,11 @@ from drive_envelope.errors import InputError  # noqa: E402
 
 NUM_ENVS, NUM_JOINTS = 4096, 12
 JOINTS = [f"{leg}_{j}" for leg in ("LF", "LH", "RF", "RH") for j in ("HAA", "HFE", "KFE")]
-ENVELOPE = {"max_actuator_velocity": 8.0, "velocity_dependent_resistance": 0.3, "speed_effort_gradient": 0.5}
+ENVELOPE: dict[str, Any] = {
+    "max_actuator_velocity": 8.0,
+    "velocity_dependent_resistance": 0.3,
+    "speed_effort_gradient": 0.5,
+}
 
 
 def _build(cfg: Any, num_envs: int = NUM_ENVS, **overrides: Any) -> Any:

@@ -12,6 +12,7 @@ First run about 90 s (Warp compiles MuJoCo Warp's kernels), about 15 s with Warp
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ import pytest
 pytest.importorskip("isaaclab_newton.assets", reason="needs Isaac Lab 3.x: scripts/test_isaaclab3.sh")
 
 CARTPOLE = Path(__file__).resolve().parents[3] / "shared" / "data" / "newton-assets" / "cartpole.usda"
-ENVELOPE = {"max_effort": 5.0, "max_actuator_velocity": 3.0, "speed_effort_gradient": 0.2}
+ENVELOPE: dict[str, Any] = {"max_effort": 5.0, "max_actuator_velocity": 3.0, "speed_effort_gradient": 0.2}
 NUM_ENVS, DT, STEPS = 2, 1.0 / 120.0, 60
 
 
