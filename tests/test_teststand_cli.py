@@ -186,3 +186,49 @@ def test_overflow_is_one_line_never_a_wrong_number(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and what in err and "t = 0 s" in err
     assert not out.exists()
+
+
+@pytest.mark.mujoco
+def test_one_solve_engines_warn_once_on_a_tgs_scenario(tmp_path: Path) -> None:
+    pytest.importorskip("mujoco")
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    tgs = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "drive_envelope",
+            "simulate",
+            str(root / "examples/scenarios/actuator_swing.toml"),
+            "--engine",
+            "mujoco",
+            "-o",
+            str(tmp_path / "tgs.csv"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert tgs.returncode == 0, tgs.stderr
+    assert tgs.stderr.count("PhysX's TGS per substep") == 1
+    assert "1.9 rad/s" in tgs.stderr
+    pgs = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "drive_envelope",
+            "simulate",
+            str(root / "examples/scenarios/braking_pgs.toml"),
+            "--engine",
+            "mujoco",
+            "-o",
+            str(tmp_path / "pgs.csv"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert pgs.returncode == 0, pgs.stderr
+    assert "TGS" not in pgs.stderr

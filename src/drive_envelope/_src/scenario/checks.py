@@ -19,6 +19,7 @@ __all__ = [
     "check_int",
     "check_keys",
     "choice",
+    "one_solve_tgs_note",
     "quantities",
     "read_text",
     "table",
@@ -100,3 +101,20 @@ def quantities(
                 raise InputError(f"{where}: expected a number in {unit}, got {data[key]!r}")
             values[key] = value
     return values
+
+
+def one_solve_tgs_note(engine: str, solver: str) -> str | None:
+    """What an engine that takes one drive solve per step says of a TGS scenario, or None.
+
+    PhysX's TGS applies loads and clamps the envelope per substep; the one-joint MuJoCo and Newton
+    stands solve the drive once per step, so their transients part from PhysX's while their steady
+    states agree. The sizes are those of ``docs/parity.md`` (``benchmarks/parity_table.py``, the
+    shipped TGS scenarios against the reference engine, which holds real PhysX to 4e-5 rad/s).
+    """
+    if solver != "tgs":
+        return None
+    return (
+        f"the {engine} engine solves the drive once per step, PhysX's TGS per substep: on the shipped "
+        "TGS scenarios transients differ from PhysX by up to 1.9 rad/s and 1.6 N*m (docs/parity.md), "
+        "steady states agree; use --engine reference or physx for TGS transients"
+    )

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import warnings
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
@@ -38,9 +39,10 @@ import numpy as np
 from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope._src.errors import InputError
+from drive_envelope._src.errors import EngineWarning, InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
+from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import JointSpec, Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
@@ -173,6 +175,9 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
     import mujoco
 
     _check(scenario)
+    note = one_solve_tgs_note("mujoco", scenario.simulation.solver)
+    if note is not None:
+        warnings.warn(note, EngineWarning, stacklevel=2)
     if schedule is not None:
         schedule.check_steps(scenario.simulation.steps, _where(scenario))
     spec, drive = stand_spec(scenario)

@@ -23,6 +23,7 @@ per step) and its metadata says so. Newton computes in float32 (the implicit sol
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -30,6 +31,7 @@ import numpy as np
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import EngineWarning, InputError
+from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
@@ -163,6 +165,9 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
     from drive_envelope._src.kernels.warp_setup import quiet_warp
 
     _check(scenario)
+    note = one_solve_tgs_note("newton", scenario.simulation.solver)
+    if note is not None:
+        warnings.warn(note, EngineWarning, stacklevel=2)
     with quiet_warp():
         return _run(scenario, progress)
 
