@@ -11,10 +11,11 @@ Each page gets a copy of the tracked files (``tmp/x/main``, with ``tmp/x/shared`
 Not run, but checked: ``pip install`` lines (each extra they name exists in pyproject.toml) and
 ``make demo`` / ``make test`` (the README's two set-up commands). A block that needs a GPU or Isaac
 Sim says so in an HTML comment right before its fence, ``<!-- docs-test: skip gpu -->`` or
-``<!-- docs-test: skip isaacsim -->``; nothing else is skipped. ``<!-- docs-test: continues -->``
-before a python block runs the page's previous python block first (a snippet that goes on from the
-last one); ``<!-- docs-test: venv .venv-mjlab -->`` runs it with that environment's python (skipped
-while that environment is not created, as the mjlab tests are). A command that reads
+``<!-- docs-test: skip isaacsim -->``. ``<!-- docs-test: skip broken -->`` marks a block known to
+fail today; their number is held by a ratchet (``KNOWN_BROKEN_BLOCKS``) that only goes down.
+``<!-- docs-test: continues -->`` before a python block runs the page's previous python block
+first (a snippet that goes on from the last one); ``<!-- docs-test: venv .venv-mjlab -->`` runs
+it with that environment's python (skipped while that environment is not created, as the mjlab tests are). A command that reads
 ``../shared/`` is skipped when the shared data is absent, as the data tests are.
 
 Each page is one test; its failure lists every failing snippet as ``file:line``.
@@ -41,7 +42,17 @@ from _checkout import ROOT, SHARED, copy_checkout
 
 pytestmark = pytest.mark.slow
 
-SKIP_REASONS = {"gpu": "needs a CUDA device", "isaacsim": "needs Isaac Sim"}
+SKIP_REASONS = {
+    "gpu": "needs a CUDA device",
+    "isaacsim": "needs Isaac Sim",
+    "broken": "known to fail as written (issue 24: an input not shipped yet, or undefined names)",
+}
+KNOWN_BROKEN_BLOCKS = 21
+"""Blocks marked ``skip broken`` when the docs test landed (35 failing commands in 21 blocks).
+
+Issue 24 stays open until this is 0: fix a block, remove its marker and lower the number; the
+ratchet test below fails when a marker is added (a new broken block) or the number is not lowered.
+"""
 SHELL_LANGS = {"sh", "bash", "shell", "console"}
 COMMAND_TIMEOUT_S = 240.0
 _FENCE = re.compile(r"^(\s*)```(\w*)\s*$")
@@ -281,3 +292,18 @@ def test_parser_reads_console_commands_markers_and_continuations(tmp_path: Path)
     assert shell_commands(found[2]) == [(14, "make demo")]
     assert check_install("pip install '.[plot,nosuch]'") is not None
     assert check_install("pip install '.[plot,mujoco]'   # extras") is None
+
+
+def test_known_broken_blocks_only_go_down() -> None:
+    marked = [
+        f"{page}:{snippet.line}"
+        for page in _pages()
+        for snippet in snippets(ROOT, page)
+        if "skip broken" in snippet.markers
+    ]
+    assert len(marked) <= KNOWN_BROKEN_BLOCKS, (
+        f"{len(marked)} blocks marked 'skip broken' (at most {KNOWN_BROKEN_BLOCKS}): fix new ones instead"
+    )
+    assert len(marked) == KNOWN_BROKEN_BLOCKS, (
+        f"only {len(marked)} blocks are marked 'skip broken' now: lower KNOWN_BROKEN_BLOCKS to {len(marked)}"
+    )

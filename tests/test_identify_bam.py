@@ -52,7 +52,9 @@ def test_envelope_model_is_within_1_5x_of_bam_m1_on_held_out_logs() -> None:
         STAND,
         validate=splits["holdout"],
         fit=FIT,
-        options=SearchOptions(generations=15, population=6, polish_evaluations=10, restarts=1),
+        # the reference runs PhysX's velocity sweep even with 0 velocity iterations (as the XL330
+        # stand has): its likelihood surface is narrower, 15 generations of 6 landed at 96 mrad
+        options=SearchOptions(generations=40, population=8, polish_evaluations=20, restarts=1),
     )
     holdout = float(np.mean([e.mae_position for e in result.validation]))
     assert holdout < 1.5 * BAM_M1_HOLDOUT, f"held-out MAE {1e3 * holdout:.1f} mrad"
