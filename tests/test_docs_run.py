@@ -15,8 +15,9 @@ Sim says so in an HTML comment right before its fence, ``<!-- docs-test: skip gp
 fail today; their number is held by a ratchet (``KNOWN_BROKEN_BLOCKS``) that only goes down.
 ``<!-- docs-test: continues -->`` before a python block runs the page's previous python block
 first (a snippet that goes on from the last one); ``<!-- docs-test: venv .venv-mjlab -->`` runs
-it with that environment's python (skipped while that environment is not created, as the mjlab tests are). A command that reads
-``../shared/`` is skipped when the shared data is absent, as the data tests are.
+it with that environment's python (skipped while that environment is not created, as the mjlab
+tests are). A command that reads ``../shared/`` is skipped when the shared data is absent, as
+the data tests are.
 
 Each page is one test; its failure lists every failing snippet as ``file:line``.
 """
