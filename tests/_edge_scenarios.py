@@ -53,6 +53,12 @@ EDGE_CASES: dict[str, dict[str, Any]] = {
         "joint": {"type": "prismatic", "inertia": 1.0},
         "drive": {"stiffness": 100.0, "damping": 5.0, "target_position": -0.3},
     },
+    "speed_line_only": {  # PhysX's unauthored maxForce (FLT_MAX) under an envelope: eq. 2 alone
+        "joint": {"type": "revolute", "inertia": 0.05},
+        "drive": {"damping": 20.0, "target_velocity": 10.0, "max_effort": 3.4028234663852886e38},
+        "envelope": {"max_actuator_velocity": 3.0, "speed_effort_gradient": 0.1},
+    },
 }
 """Scenario mappings by name: an acceleration drive on a prismatic joint, applied and external
-effort together, a stiff plain drive, a drive that is off, an unlimited drive."""
+effort together, a stiff plain drive, a drive that is off, an unlimited drive, an envelope on an
+unlimited drive (the speed line alone)."""

@@ -189,10 +189,13 @@ def test_missing_joint_and_malformed_files_are_reported(tmp_path: Path) -> None:
         load_scenario(write(tmp_path, "[joints]\ninertia = 1.0\n"))
 
 
-def test_envelope_needs_a_finite_max_effort(tmp_path: Path) -> None:
-    """An [envelope] without drive.max_effort (and no datasheet) names drive.max_effort."""
-    with pytest.raises(InputError, match=r"key 'drive\.max_effort'"):
-        load_scenario(write(tmp_path, "[joint]\ninertia = 1.0\n[envelope]\nmax_actuator_velocity = 3.0\n"))
+def test_envelope_without_max_effort_keeps_the_speed_line(tmp_path: Path) -> None:
+    """An [envelope] without drive.max_effort is PhysX's unlimited maxForce: eq. 2 alone."""
+    scenario = load_scenario(
+        write(tmp_path, "[joint]\ninertia = 1.0\n[envelope]\nmax_actuator_velocity = 3.0\n")
+    )
+    assert scenario.envelope is not None and scenario.envelope.max_effort == math.inf
+    assert scenario.envelope.max_actuator_velocity == 3.0
 
 
 def test_envelope_from_an_envelope_file_with_overrides(tmp_path: Path) -> None:

@@ -202,6 +202,23 @@ def test_infinite_velocity_is_written_as_inf() -> None:
     assert read_envelope(stage, "/Robot/hinge").max_actuator_velocity == math.inf
 
 
+def test_unlimited_max_force_keeps_the_speed_line() -> None:
+    """An envelope on an unlimited maxForce (PhysX's FLT_MAX) reads back with max_effort inf and its
+    speed line, as PhysX applies it; list_drives reports the same envelope."""
+    from drive_envelope.usd import list_drives, read_envelope, write_envelope
+
+    stage = _stage()
+    speed_line = PerformanceEnvelope(
+        max_effort=math.inf, max_actuator_velocity=3.0, speed_effort_gradient=0.1
+    )
+    write_envelope(stage, "/Robot/hinge", speed_line)
+    envelope = read_envelope(stage, "/Robot/hinge")
+    assert (envelope.max_effort, envelope.speed_effort_gradient) == (math.inf, pytest.approx(0.1))
+    assert envelope.max_actuator_velocity == pytest.approx(3.0)
+    (record,) = [r for r in list_drives(stage) if r.joint_path == "/Robot/hinge"]
+    assert record.envelope is not None and record.envelope.max_effort == math.inf
+
+
 def test_d6_axes_need_an_instance() -> None:
     """Require rotX|rotY|rotZ on D6 joints and write the chosen axis."""
     from drive_envelope.usd import read_envelope, write_envelope

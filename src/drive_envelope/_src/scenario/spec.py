@@ -76,7 +76,7 @@ _ENVELOPE_KEYS = (
 _MIN_STEP = 1.1754943508222875e-38
 MAX_POSITION = 1e6
 """Largest ``|initial_position|`` [rad or m]: float32's spacing there is 0.0625 (PhysX steps in float32)."""
-_MAX_STEP = 3.4028234663852886e38
+_FLT_MAX = 3.4028234663852886e38
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -126,7 +126,7 @@ class DriveSpec:
     """Drive target velocity [rad/s or m/s]."""
     max_effort: float = math.inf
     """PhysX ``maxForce``, the envelope's ``maxEffort`` [N*m or N]; ``>= 0``. ``inf`` (omitted)
-    means unlimited, 0 turns the drive off."""
+    or PhysX's ``FLT_MAX`` (read as ``inf``) means unlimited, 0 turns the drive off."""
 
     def __post_init__(self) -> None:
         if self.type not in ("force", "acceleration"):
@@ -137,6 +137,8 @@ class DriveSpec:
         _check_finite("drive.target_velocity", self.target_velocity)
         if math.isnan(self.max_effort) or self.max_effort < 0.0:
             raise InputError(f"drive.max_effort must be >= 0, got {self.max_effort!r}")
+        if self.max_effort >= _FLT_MAX:  # PhysX's FLT_MAX is its "no limit" (NO_LIMIT_FIELDS)
+            object.__setattr__(self, "max_effort", math.inf)
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -184,10 +186,10 @@ class SimulationSpec:
         _check_int("simulation.position_iterations", self.position_iterations, 1)
         _check_int("simulation.velocity_iterations", self.velocity_iterations, 0)
         substep = self.dt / self.position_iterations
-        if not _MIN_STEP <= substep <= _MAX_STEP:
+        if not _MIN_STEP <= substep <= _FLT_MAX:
             raise InputError(
                 f"simulation.dt must give a (sub)step within float32's range {_MIN_STEP:.2g} .. "
-                f"{_MAX_STEP:.2g} s (PhysX steps in float32), got dt = {self.dt!r} s with "
+                f"{_FLT_MAX:.2g} s (PhysX steps in float32), got dt = {self.dt!r} s with "
                 f"{self.position_iterations} position iteration(s)"
             )
         if not math.isfinite(self.duration / self.dt):
@@ -402,12 +404,7 @@ def _read_envelope(
         if math.isfinite(drive.max_effort):
             merged["max_effort"] = drive.max_effort  # [drive] max_effort replaces the datasheet's
         envelope = PerformanceEnvelope(**merged)
-    else:
-        if math.isinf(drive.max_effort):
-            raise InputError(
-                f"{source}: key 'drive.max_effort': an [envelope] needs a finite max_effort "
-                f"({_unit(joint, 'N*m', 'N')}), the envelope's maxEffort"
-            )
+    else:  # an unlimited maxForce leaves only the speed line (eq. 2), as in PhysX
         envelope = PerformanceEnvelope(max_effort=drive.max_effort, joint=joint, **values)  # type: ignore[arg-type]
     if envelope.max_effort != drive.max_effort:
         drive = _replace_max_effort(drive, envelope.max_effort)

@@ -20,7 +20,6 @@ PhysX computes in float32: expect agreement with ``reference`` to float32 precis
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -130,8 +129,6 @@ def _check(scenario: Scenario) -> None:
     sim = scenario.simulation
     if not 1.0 / sim.dt < 2**32:
         raise InputError(f"{scenario.name or 'scenario'}: simulation.dt {sim.dt!r} is too small for PhysX")
-    if math.isinf(scenario.drive.max_effort) and scenario.envelope is not None:
-        raise InputError(f"{scenario.name or 'scenario'}: an envelope needs a finite drive.max_effort")
 
 
 def _joint_effort(scenario: Scenario, result: PhysxResult) -> np.ndarray:

@@ -93,7 +93,7 @@ class DriveRecord:
     """Drive damping [N*m*s/rad or N*s/m] (force drives; acceleration drives: [1/s])."""
     envelope: PerformanceEnvelope | None
     """The envelope PhysX reads, or None when PhysxDrivePerformanceEnvelopeAPI is not applied
-    (PhysX then uses ``(maxForce, inf, 0, 0)``) or maxForce is unlimited."""
+    (PhysX then uses ``(maxForce, inf, 0, 0)``); its ``max_effort`` is inf for an unlimited maxForce."""
 
 
 # -- stage helpers ------------------------------------------------------------------------------------
@@ -398,20 +398,14 @@ def read_envelope(
         The envelope in SI (joint side), ``name`` set to the joint path.
 
     Raises:
-        InputError: no such joint, no ``PhysxDrivePerformanceEnvelopeAPI:<inst>`` on it, an unlimited
-            maxForce, or negative / NaN values.
+        InputError: no such joint, no ``PhysxDrivePerformanceEnvelopeAPI:<inst>`` on it, or
+            negative / NaN values.
     """
     prim = resolve_joint(prim_or_stage, joint_path)
     inst = _choose_instance(prim, joint_kind(prim), instance)
     if not prim.HasAPI(ENVELOPE_API, inst):
         raise InputError(f"joint {str(prim.GetPath())!r}: no {ENVELOPE_API}:{inst} applied")
-    envelope = _envelope_of(prim, inst, stage_units(prim.GetStage()))
-    if envelope is None:
-        raise InputError(
-            f"joint {str(prim.GetPath())!r} ({inst}): maxForce is unlimited; "
-            "an envelope needs a finite maxEffort"
-        )
-    return envelope
+    return _envelope_of(prim, inst, stage_units(prim.GetStage()))
 
 
 def _number(attr: Any, default: float, where: str) -> float:
@@ -463,11 +457,12 @@ def model_rating(prim: Usd.Prim, instance: str | None) -> tuple[float, float]:
     return effort, speed
 
 
-def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnvelope | None:
-    """The envelope of an instance that has the API applied; None for an unlimited maxForce."""
+def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnvelope:
+    """The envelope of an instance that has the API applied.
+
+    An unlimited maxForce gives ``max_effort = inf``: PhysX then keeps the speed line (eq. 2) alone.
+    """
     max_effort, _, _ = _drive_values(prim, inst, units)
-    if math.isinf(max_effort):
-        return None
     factors = {
         "max_actuator_velocity": units.velocity(inst),
         "velocity_dependent_resistance": units.per_speed(inst),
