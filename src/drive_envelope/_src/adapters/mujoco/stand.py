@@ -11,26 +11,30 @@ all three inputs: the target position, the target velocity and the scenario's ap
 ``qfrc_applied``: it is not actuator effort, so the envelope does not limit it. A drive schedule
 writes the targets every step and zeroes the gains (``set_gains``) while the drive is unpowered.
 
-MuJoCo takes one step per ``dt`` with one implicit drive solve, which is what PhysX's PGS solver
-does for an isolated DOF. PhysX's TGS integrates and clamps per substep; a TGS scenario still runs
-here (same model, one solve per step) and its metadata says so.
+The plugin iterates the drive as the scenario's PhysX solver does (``set_solver(spec, solver,
+position_iterations=, velocity_iterations=)``, as the chain stand): PGS's position sweeps and at
+least one velocity sweep; TGS's substeps of ``dt/position_iterations``, each applying the loads
+over the substep and clamping its own impulse, then the velocity sweeps that re-clamp the step's
+total; and the position PhysX integrates (the plugin shifts MuJoCo's ``q + h*v1`` to it). On every
+shipped scenario, PGS and TGS, that is the reference to 1e-11 (``docs/parity.md``).
 
 Joint friction is where the models differ. MuJoCo has one Coulomb friction, ``frictionloss``, so
 it needs ``static_friction == dynamic_friction`` (PhysX's break-away above sliding friction cannot
 be represented and is refused); it is a constraint, made hard here (``solreffriction = (2*dt, 1)``,
 ``solimpfriction`` 0.9999) so a stopping joint sticks as in PhysX. Viscous friction becomes
-MuJoCo's joint ``damping`` (linear term), integrated implicitly. MuJoCo solves the actuators first
-and the constraints after, once: that is PhysX PGS with one position and no velocity iteration
-(drive, then friction), which it matches to ~1e-11 (``tests/test_mujoco_teststand.py``). With more
-iterations PhysX's drive sees the friction of the iteration before and answers it within the step;
-where the friction impulse per step is large against the joint's momentum, results then differ.
+MuJoCo's joint ``damping`` (linear term), which the plugin solves implicitly in each drive row.
+MuJoCo solves the actuators first and the frictionloss constraint after, once: a joint without a
+powered drive (a coasting or swinging load) matches PhysX PGS 1/0 to ~1e-11
+(``tests/test_mujoco_teststand.py``). PhysX's drive sees the friction of the sweep before and
+answers it within the step, and even at 0 velocity iterations it runs one more sweep; MuJoCo's
+drive never sees the frictionloss, so a drive against Coulomb friction differs (a damping drive at
+5 rad/s against 0.2 N*m: 3.8 rad/s here, 4.8 in PhysX).
 """
 
 from __future__ import annotations
 
 import contextlib
 import math
-import warnings
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
@@ -38,11 +42,10 @@ import numpy as np
 
 from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
-from drive_envelope._src.envelope.model import PerformanceEnvelope
-from drive_envelope._src.errors import EngineWarning, InputError
+from drive_envelope._src.envelope.model import NO_LIMIT_FIELDS, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
-from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import JointSpec, Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
@@ -100,21 +103,23 @@ def _check(scenario: Scenario) -> None:
             raise InputError(f"{where}: key {key!r} = {value!r}: the mujoco engine takes at most 1e12 (SI)")
     envelope = scenario.effective_envelope()
     if envelope is not None:
-        for field in ("max_effort", "velocity_dependent_resistance", "speed_effort_gradient"):
+        for field in ("velocity_dependent_resistance", "speed_effort_gradient"):
             value = getattr(envelope, field)
             if value > PARAM_BOUND:
                 raise InputError(f"{where}: {field} = {value!r}: the mujoco engine takes at most 1e12 (SI)")
-        speed = envelope.max_actuator_velocity
-        if math.isfinite(speed) and speed > PARAM_BOUND:
-            raise InputError(
-                f"{where}: max_actuator_velocity = {speed!r}: the mujoco engine takes at most 1e12 "
-                "or inf (SI)"
-            )
+        for field in NO_LIMIT_FIELDS:  # inf is the plugin's -1, no limit
+            value = getattr(envelope, field)
+            if math.isfinite(value) and value > PARAM_BOUND:
+                raise InputError(
+                    f"{where}: {field} = {value!r}: the mujoco engine takes at most 1e12 or inf (SI)"
+                )
 
 
 def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
-    """The scenario's test stand as an ``MjSpec`` (one body, one DOF) and its drive handle."""
+    """The scenario's test stand as an ``MjSpec`` (one body, one DOF, PhysX's solver) and its drive."""
     import mujoco
+
+    from drive_envelope._src.adapters.mujoco.solver import set_solver
 
     spec = mujoco.MjSpec()
     spec.modelname = scenario.name or "teststand"
@@ -158,6 +163,9 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
     if unlimited:
         actuator = spec.actuator(drive.name)
         actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
+    sim = scenario.simulation
+    set_solver(spec, sim.solver, position_iterations=sim.position_iterations,
+               velocity_iterations=sim.velocity_iterations)  # fmt: skip
     return spec, drive
 
 
@@ -175,9 +183,6 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
     import mujoco
 
     _check(scenario)
-    note = one_solve_tgs_note("mujoco", scenario.simulation.solver)
-    if note is not None:
-        warnings.warn(note, EngineWarning, stacklevel=2)
     if schedule is not None:
         schedule.check_steps(scenario.simulation.steps, _where(scenario))
     spec, drive = stand_spec(scenario)
@@ -276,16 +281,15 @@ def _metadata(scenario: Scenario) -> dict[str, object]:
     import mujoco
 
     sim = scenario.simulation
-    note = "one implicit drive solve per step (PhysX PGS for an isolated DOF)"
-    if sim.solver == "tgs":
-        note += "; PhysX TGS integrates and clamps per substep, so transients differ"
     return {
         "solver": sim.solver,
         "dt": sim.dt,
+        "position_iterations": sim.position_iterations,
+        "velocity_iterations": sim.velocity_iterations,
+        "plugin_solver": sim.solver,
         "mujoco_version": str(mujoco.__version__),
         "integrator": "Euler",
         "plugin": "drive_envelope.envelope",
-        "note": note,
         "unlimited_effort": math.isinf(scenario.drive.max_effort),
     }
 
