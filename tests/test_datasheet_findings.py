@@ -120,3 +120,46 @@ def test_motor_constants_beyond_any_motor_are_a_warning(key: str, value: str, bo
     else:
         (line,) = found
         assert f"motor.{key} = {bound} is outside what motors have" in line
+
+
+@pytest.mark.parametrize(
+    ("no_load_speed", "expected"),
+    [
+        ("5240 rpm", None),  # 229 rpm/V * 24 V = 5496 rpm: the printed end of the line, 0.95x
+        ("5240 rad/s", "9.1x"),  # the same number read as rad/s moves the speed line 9.55x
+        ("1310 rpm", None),  # printed at a quarter of the voltage (4x): still no warning
+    ],
+)
+def test_a_no_load_speed_against_kv_times_voltage_is_a_warning(
+    no_load_speed: str, expected: str | None
+) -> None:
+    """Item 9, the speed line: the printed n_0 against k_v * V (a slip of rpm for rad/s is named)."""
+    found = [
+        w
+        for w in _warnings(
+            {"speed_constant": "229 rpm/V", "no_load_speed": no_load_speed, "torque_constant": "41.7 mN*m/A"},
+            {"max_current": "10 A", "max_voltage": "24 V"},
+        )
+        if "motor.no_load_speed" in w
+    ]
+    if expected is None:
+        assert found == []
+    else:
+        (line,) = found
+        assert f"speed_constant * controller.max_voltage = 575.54 rad/s ({expected})" in line
+        assert "'rpm' vs 'rad/s'" in line
+
+
+def test_a_motor_speed_beyond_any_motor_is_a_warning() -> None:
+    """Item 9: 50,000 rad/s (477,000 rpm) is no motor's speed; the bounds are named."""
+    found = [
+        w
+        for w in _warnings(
+            {"max_speed": "50000 rad/s", "torque_constant": "0.1 N*m/A"},
+            {"max_current": "10 A", "max_voltage": "24 V"},
+        )
+        if "is outside what motors have" in w
+    ]
+    (line,) = found
+    assert "motor.max_speed = 50000 rad/s is outside what motors have (0.1 rad/s to 12000 rad/s)" in line
+    assert "check its unit ('rpm' vs 'rad/s'" in line

@@ -11,20 +11,27 @@ from __future__ import annotations
 from drive_envelope._src.datasheet.context import DeriveContext
 from drive_envelope._src.format import format_value
 
-__all__ = ["FACTOR", "LOWEST_EFFICIENCY", "PLAUSIBLE", "plausibility_warnings"]
+__all__ = ["FACTOR", "LOWEST_EFFICIENCY", "PLAUSIBLE", "SPEED_FACTOR", "plausibility_warnings"]
 
 FACTOR = 2.0
 """Redundant inputs that disagree by more than this factor draw a warning."""
+SPEED_FACTOR = 6.0
+"""A printed no-load speed and ``k_v * V`` that disagree by more than this draw a warning: wide
+enough for a motor rated at another voltage than the controller's (48 V on 12 V is 4x), narrow
+enough for ``rpm`` read as ``rad/s`` (9.55x)."""
 LOWEST_EFFICIENCY = 0.2
 """An efficiency below this draws a warning (``0.9 %`` typed for ``90 %``)."""
 PLAUSIBLE: dict[str, tuple[float, float, str]] = {
     "terminal_resistance": (1e-4, 1e3, "ohm"),
     "torque_constant": (1e-4, 1e2, "N*m/A"),
     "speed_constant": (1e-2, 1e4, "rad/s/V"),
+    "no_load_speed": (1e-1, 1.2e4, "rad/s"),
+    "max_speed": (1e-1, 1.2e4, "rad/s"),
 }
 """Rotary motors' constants outside these bounds [SI] are a unit slip far more often than a motor:
 from a large servo motor's few milliohms to a coreless micro motor's hundreds of ohms, with margin
-(``1000 MΩ`` typed for ``mΩ`` is 1e9 ohm)."""
+(``1000 MΩ`` typed for ``mΩ`` is 1e9 ohm); speeds up to the fastest micro motors' 100,000 rpm
+(``10000 rad/s`` is 95,000 rpm)."""
 
 
 def plausibility_warnings(ctx: DeriveContext) -> list[str]:
@@ -50,7 +57,7 @@ def plausibility_warnings(ctx: DeriveContext) -> list[str]:
                 f"terminal_resistance / torque_constant^2 = {format_value(computed, unit)} "
                 f"({printed / computed:.3g}x): check their units"
             )
-    warnings += _outside_plausible(ctx) + _current_conventions(ctx)
+    warnings += _outside_plausible(ctx) + _current_conventions(ctx) + _speed_line(ctx)
     for key, value in (
         ("gear.efficiency", ctx.transmission.efficiency),
         ("screw.efficiency", ctx.transmission.screw_efficiency),
@@ -71,10 +78,14 @@ def _outside_plausible(ctx: DeriveContext) -> list[str]:
     for key, (low, high, unit) in PLAUSIBLE.items():
         value = getattr(motor, key, None)
         if value is not None and value > 0.0 and not low <= value <= high:
+            hint = (
+                "check its unit ('rpm' vs 'rad/s', 'krpm')"
+                if unit == "rad/s"
+                else "check its unit prefix ('mohm' vs 'Mohm', 'mNm/A' vs 'N*m/A')"
+            )
             found.append(
                 f"{ctx.sheet.source}: motor.{key} = {format_value(value, unit)} is outside what motors have "
-                f"({format_value(low, unit)} to {format_value(high, unit)}): check its unit prefix "
-                "('mohm' vs 'Mohm', 'mNm/A' vs 'N*m/A')"
+                f"({format_value(low, unit)} to {format_value(high, unit)}): {hint}"
             )
     return found
 
@@ -91,4 +102,31 @@ def _current_conventions(ctx: DeriveContext) -> list[str]:
         f"{ctx.sheet.source}: motor.torque_constant is per A {kt} but controller.max_current is marked "
         f"{current}: both are read as plain amperes, so the controller_current limit is {factor} for a "
         f"sinusoidal current; write max_current in the torque constant's convention ({fix})"
+    ]
+
+
+def _speed_line(ctx: DeriveContext) -> list[str]:
+    """The speed line's redundant ends: a printed no-load speed against ``k_v * V``.
+
+    A DC motor's no-load speed is its speed constant times the supply voltage (a little less, for
+    friction, and vendors print it at the motor's rated voltage, not the controller's); the two
+    disagreeing by more than :data:`SPEED_FACTOR` is a unit slip on one of them (``rpm`` read as
+    ``rad/s`` is 9.55x, ``rpm/V`` as ``rad/s/V`` too), and it moves the joint's speed line.
+    """
+    motor, controller = ctx.sheet.motor, ctx.sheet.controller
+    if motor is None or controller is None or ctx.sheet.linear_motor:
+        return []
+    kv = motor.speed_constant
+    if kv is None and motor.back_emf_constant:
+        kv = 1.0 / motor.back_emf_constant
+    voltage, printed = controller.max_voltage, motor.no_load_speed
+    if not kv or not voltage or not printed:
+        return []
+    computed = kv * voltage
+    if 1.0 / SPEED_FACTOR <= printed / computed <= SPEED_FACTOR:
+        return []
+    return [
+        f"{ctx.sheet.source}: motor.no_load_speed = {format_value(printed, 'rad/s')} but speed_constant "
+        f"* controller.max_voltage = {format_value(computed, 'rad/s')} ({printed / computed:.3g}x): "
+        "check their units ('rpm' vs 'rad/s', 'rpm/V'); the no-load speed sets the speed line"
     ]
