@@ -7,8 +7,10 @@ part of ``make setup``), then either write ``<plugin plugin="drive_envelope.enve
 in MJCF, call :func:`add_drive` on a ``mujoco.MjSpec``, or run ``drive-envelope mujoco apply``.
 A drive's numbers live in the model (``actuator_dynprm``, :data:`DYNPRM_SLOTS`):
 :func:`set_envelope` and :func:`set_gains` change them between steps; :func:`set_solver` chooses
-the exact coupled solve (the default) or PhysX's PGS/TGS iteration over the drives. mujoco itself is imported
-only inside these functions.
+the exact coupled solve (the default) or PhysX's PGS/TGS iteration over the drives.
+:func:`effective_inertia` gives each joint's ``1/(M^-1)_ii`` [kg*m^2 or kg] at a configuration, the
+unit response an explicit actuator's end-of-step clip needs (Isaac Lab's and mjlab's
+``effective_inertia``). mujoco itself is imported only inside these functions.
 
 MuJoCo's units are unspecified; drive_envelope assumes the model is SI (rad, m, s, kg): efforts in
 [N*m or N], velocities in [rad/s or m/s]. Integrators: ``plugin/mujoco/README.md``.
@@ -17,6 +19,7 @@ MuJoCo's units are unspecified; drive_envelope assumes the model is SI (rad, m, 
 from __future__ import annotations
 
 from drive_envelope._src.adapters.mujoco.build import BUILD_COMMAND, PluginError, build_plugin
+from drive_envelope._src.adapters.mujoco.inertia import effective_inertia
 from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME, load_plugin, plugin_library_path
 from drive_envelope._src.adapters.mujoco.mjcf import write_mjcf
 from drive_envelope._src.adapters.mujoco.params import (
@@ -60,6 +63,7 @@ __all__ = [
     "build_plugin",
     "drive_dynprm",
     "drive_state",
+    "effective_inertia",
     "get_envelope",
     "get_gains",
     "get_solver",
