@@ -3,9 +3,9 @@
 Every entry whose source is a vendor's machine-readable file (a URDF, a xacro, ROBOTIS' e-Manual data
 file) must name the file at a pinned revision and the element, and its numbers must be the element's.
 The element texts below were copied from the files at the revisions named (read on 2026-12-02 from
-unitreerobotics/unitree_ros @ d6f13aad and ROBOTIS-GIT/emanual @ 00280385); fetched files are not
-committed, so the transcription lives here. The numbers are read back from the quoted text with the
-library's own unit reader, and compared with what the catalog entry derives.
+unitreerobotics/unitree_ros @ d6f13aad and ROBOTIS-GIT/emanual @ 00280385 and @ 1a5e5fbe); fetched
+files are not committed, so the transcription lives here. The numbers are read back from the quoted
+text with the library's own unit reader, and compared with what the catalog entry derives.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ UNITREE = (
     "https://github.com/unitreerobotics/unitree_ros/blob/d6f13aad60320ce1d60a07b82a76b5a553f2a0a9/robots/"
 )
 DXL_X = "https://github.com/ROBOTIS-GIT/emanual/blob/00280385680aba081862d0854c95de523c6391e6/_data/dxl_x_info.yml"
+DXL_P = "https://github.com/ROBOTIS-GIT/emanual/blob/1a5e5fbeb6c41e261a1c67ba74e1cb3ec728072e/_data/dxl_p_info.yml"
 
 
 class Element(NamedTuple):
@@ -42,6 +43,12 @@ def urdf(path: str, joint: str, limit: str) -> Element:
 def dxl(key: str, stall: str, no_load: str) -> Element:
     """The e-Manual's entry ``key``: the stall torque and no-load speed at the rated voltage."""
     return Element(DXL_X, key, f'stalltorque: "{stall}" noloadspeed: "{no_load}"')
+
+
+def dxl_p(key: str, no_load: str, cont_speed: str, cont_torque: str) -> Element:
+    """The DYNAMIXEL-P entry ``key``: no-load speed and the continuous point (speed at its torque)."""
+    text = f'noloadspeed: "{no_load}" contspeed: "{cont_speed}" conttorque: "{cont_torque}"'
+    return Element(DXL_P, key, text)
 
 
 G1 = "g1_description/g1_29dof.urdf"
@@ -136,15 +143,16 @@ TRANSCRIPTION: dict[str, Element] = {
     "dynamixel-xm540-w270": dxl(
         "xm540-w270", "10.6 [N.m] (at 12.0 [V], 4.4 [A])", "30 [rev/min] (at 12.0 [V])"
     ),
+    # dxl_p_info.yml @ 1a5e5fbe, keys 'ph42-020-s300-r' and 'ph54-200-s500-r' (read 2026-12-02)
+    "dynamixel-ph42-020-s300-r": dxl_p("ph42-020-s300-r", "32.7 [rev/min]", "29.2 [rev/min]", "5.1 [N.m]"),
+    "dynamixel-ph54-200-s500-r": dxl_p("ph54-200-s500-r", "33.1 [rev/min]", "29.0 [rev/min]", "44.7 [N.m]"),
 }
 
 
-NOT_TRANSCRIBED = {
-    "dynamixel-ph42-020-s300-r": "dxl_p_info.yml @ 1a5e5fbe could not be read back on 2026-12-02",
-    "dynamixel-ph54-200-s500-r": "dxl_p_info.yml @ 1a5e5fbe could not be read back on 2026-12-02",
-}
-"""Entries from a vendor file whose element is still to be transcribed here, and why (a known gap:
-test_catalog_entries.py compares them with the quotes in their own comments only)."""
+NOT_TRANSCRIBED: dict[str, str] = {}
+"""Entries from a vendor file whose element is still to be transcribed here, and why (none now; a
+new gap goes here with its reason, and test_catalog_entries.py then compares it with the quotes in its
+own comments only)."""
 
 
 def _numbers(element: Element) -> tuple[float, float]:
@@ -162,6 +170,11 @@ def _numbers(element: Element) -> tuple[float, float]:
         speed = re.search(r'name="\w+_velocity_max" value="([^"]+)"', text)
         assert torque and speed
         return float(torque.group(1)), float(speed.group(1))  # URDF units: N*m, rad/s
+    if "conttorque" in text:  # DYNAMIXEL-P: the continuous torque caps peak duty too
+        torque = re.search(r'conttorque: "([\d.]+ \[[^\]]+\])', text)
+        no_load = re.search(r'noloadspeed: "([\d.]+ \[[^\]]+\])', text)
+        assert torque and no_load
+        return to_si(torque.group(1), "N*m", "yml"), to_si(no_load.group(1), "rad/s", "yml")
     stall = re.search(r'stalltorque: "([\d.]+ \[[^\]]+\])', text)
     no_load = re.search(r'noloadspeed: "([\d.]+ \[[^\]]+\])', text)
     assert stall and no_load
@@ -192,3 +205,15 @@ def test_entry_names_file_revision_element_and_has_its_numbers(name: str) -> Non
     env = derive(sheet).envelope
     assert env.max_effort == pytest.approx(effort, rel=1e-12)
     assert env.max_actuator_velocity == pytest.approx(speed, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(n for n, e in TRANSCRIPTION.items() if e.url == DXL_P))
+def test_dynamixel_p_gradient_is_the_line_through_its_continuous_point(name: str) -> None:
+    """(no-load speed - continuous speed) / continuous torque, from the element's own text."""
+    text = TRANSCRIPTION[name].text
+    no_load, cont_speed, torque = (
+        to_si(m, unit, "yml")
+        for m, unit in zip(re.findall(r'"([\d.]+ \[[^\]]+\])"', text), ("rad/s", "rad/s", "N*m"), strict=True)
+    )
+    env = derive(load_catalog_datasheet(name)).envelope
+    assert env.speed_effort_gradient == pytest.approx((no_load - cont_speed) / torque, rel=1e-12)
