@@ -1,12 +1,16 @@
 """Multi-DOF test-stand scenarios: a fixed-base chain (or tree) of driven links under gravity.
 
 A chain scenario describes an articulation as PhysX builds it: a fixed base and links, each
-hung on one driven joint (revolute about, or prismatic along, the X, Y or Z axis of its parent's
-frame). Every link frame is parallel to its parent's at zero joint position (no fixed rotations), so
-a joint's ``origin`` is where it sits in its parent's frame, and the link's centre of mass and
-principal inertia are given in its own frame. Gravity acts along the world's -Z (``[simulation]
-gravity``; a chain has gravity by default, unlike the one-joint stand). Each joint has its drive,
-envelope, friction, armature, applied effort and target, read with the one-joint tables' rules.
+hung on one driven joint, revolute about (or prismatic along) an axis of the link's frame. At
+zero joint position a link's frame sits at its joint's ``origin`` in the parent link's frame,
+turned by the fixed rotation ``quat`` (URDF's ``origin rpy``, MJCF's body ``quat``; parallel to the
+parent's by default); the joint axis (``"x"``, ``"y"``, ``"z"`` or any vector) is in that frame,
+as URDF's and MJCF's are. The link's centre of mass is in its frame, its inertia the principal
+moments about the centre of mass along axes turned by ``inertia_quat`` (MJCF's inertial ``quat``,
+PhysX's ``principalAxes``; a file may give the full tensor instead). Gravity acts along the
+world's -Z (``[simulation] gravity``; a chain has gravity by default, unlike the one-joint stand).
+Each joint has its drive, envelope, friction, armature, applied effort and target, read with the
+one-joint tables' rules.
 
 A one-joint scenario (:class:`~drive_envelope._src.scenario.spec.Scenario`) is a chain of one:
 :func:`chain_from_scenario` turns it into the equivalent chain (the link's inertia about the joint
@@ -25,6 +29,14 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.chain_frames import (
+    IDENTITY,
+    Quaternion,
+    principal_inertia,
+    quat_from_rpy,
+    quat_normalize,
+    unit_vector,
+)
 from drive_envelope._src.scenario.checks import check_finite
 from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec
 from drive_envelope._src.scenario.spec import DriveSpec, LoadSpec, Scenario, SimulationSpec
@@ -43,7 +55,7 @@ __all__ = [
 
 Vector3 = tuple[float, float, float]
 AXES = ("x", "y", "z")
-"""Joint axes: the X, Y or Z axis of the parent link's frame."""
+"""Named joint axes: the X, Y or Z axis of the link's frame."""
 
 
 def _vector(name: str, value: object, *, nonnegative: bool = False) -> Vector3:
@@ -62,19 +74,24 @@ class ChainJoint:
     """Joint name (unique in the chain), used for columns, prims and MJCF names."""
     type: JointType = "revolute"
     """``"revolute"`` (rad, N*m) or ``"prismatic"`` (m, N)."""
-    axis: str = "z"
-    """``"x"``, ``"y"`` or ``"z"``: the joint axis in the parent link's frame (and the link's)."""
+    axis: str | Vector3 = "z"
+    """The joint axis in the link's frame: ``"x"``, ``"y"``, ``"z"`` or a vector (made unit length)."""
     parent: int = -1
     """Index of the parent joint's link in the chain, ``-1`` for the fixed base; parents come first."""
     origin: Vector3 = (0.0, 0.0, 0.0)
     """Joint position in the parent link's frame (the base's frame is the world's) [m]."""
+    quat: Quaternion = IDENTITY
+    """Fixed rotation of the link's frame in its parent's at zero joint position, ``(w, x, y, z)``
+    (made unit length, ``w >= 0``)."""
     mass: float
     """Link mass [kg]; ``> 0``."""
     com: Vector3 = (0.0, 0.0, 0.0)
     """Link centre of mass in the link's frame (whose origin is the joint) [m]."""
     inertia: Vector3
-    """Principal moments of inertia about the centre of mass, along the link frame's axes [kg*m^2];
-    each ``> 0``."""
+    """Principal moments of inertia about the centre of mass [kg*m^2]; each ``> 0``."""
+    inertia_quat: Quaternion = IDENTITY
+    """Rotation of the principal axes in the link's frame, ``(w, x, y, z)`` (PhysX
+    ``principalAxes``, MJCF's inertial ``quat``); identity: along the link frame's axes."""
     armature: float = 0.0
     """Rotor inertia reflected to the joint (PhysX ``armature``) [kg*m^2 or kg]; ``>= 0``."""
     initial_position: float = 0.0
@@ -96,8 +113,13 @@ class ChainJoint:
             raise InputError(f"a chain joint needs a non-empty name, got {self.name!r}")
         if self.type not in ("revolute", "prismatic"):
             raise InputError(f"{where}: type must be 'revolute' or 'prismatic', got {self.type!r}")
-        if self.axis not in AXES:
-            raise InputError(f"{where}: axis must be one of 'x', 'y', 'z', got {self.axis!r}")
+        if isinstance(self.axis, str):
+            if self.axis not in AXES:
+                raise InputError(f"{where}: axis must be 'x', 'y', 'z' or [x, y, z], got {self.axis!r}")
+        else:
+            object.__setattr__(self, "axis", unit_vector(self.axis, f"{where}: axis"))
+        object.__setattr__(self, "quat", quat_normalize(self.quat, f"{where}: quat"))
+        object.__setattr__(self, "inertia_quat", quat_normalize(self.inertia_quat, f"{where}: inertia_quat"))
         if isinstance(self.parent, bool) or not isinstance(self.parent, int) or self.parent < -1:
             raise InputError(f"{where}: parent must be -1 (the base) or a joint index, got {self.parent!r}")
         object.__setattr__(self, "origin", _vector(f"{where}: origin", self.origin))
@@ -121,9 +143,18 @@ class ChainJoint:
                 )
 
     @property
-    def axis_index(self) -> int:
-        """0, 1 or 2 for the X, Y or Z axis."""
-        return AXES.index(self.axis)
+    def axis_index(self) -> int | None:
+        """0, 1 or 2 for a named axis (``"x"``, ``"y"``, ``"z"``), None for a vector."""
+        return AXES.index(self.axis) if isinstance(self.axis, str) else None
+
+    @property
+    def axis_vector(self) -> Vector3:
+        """The unit joint axis in the link's frame."""
+        if isinstance(self.axis, str):
+            unit = [0.0, 0.0, 0.0]
+            unit[AXES.index(self.axis)] = 1.0
+            return (unit[0], unit[1], unit[2])
+        return self.axis
 
     def effective_envelope(self) -> PerformanceEnvelope | None:
         """The envelope PhysX applies to drive + applied effort (see ``Scenario.effective_envelope``)."""
@@ -229,7 +260,8 @@ def chain_from_scenario(scenario: Scenario) -> ChainScenario:
 
 _TOP_KEYS = ("name", "description", "simulation", "joints")
 _JOINT_KEYS = (
-    "name", "type", "axis", "parent", "origin", "mass", "com", "inertia", "armature",
+    "name", "type", "axis", "parent", "origin", "quat", "rpy", "mass", "com", "inertia", "inertia_quat",
+    "armature",
     "initial_position", "initial_velocity", "drive", "envelope", "load", "friction",
 )  # fmt: skip
 
@@ -262,10 +294,15 @@ def chain_from_mapping(
 ) -> ChainScenario:
     """Build a :class:`ChainScenario` from a parsed file: ``[simulation]`` and ``[[joints]]``.
 
-    Each ``[[joints]]`` entry has ``name``, ``type``, ``axis``, ``parent`` (``"base"`` or an earlier
-    joint's name; the previous joint when omitted, so a list is a serial chain), ``origin``,
-    ``mass``, ``com``, ``inertia``, ``armature``, ``initial_position``, ``initial_velocity`` and the
-    tables ``drive``, ``envelope``, ``load``, ``friction`` with the one-joint file's keys.
+    Each ``[[joints]]`` entry has ``name``, ``type``, ``axis`` (``"x"``, ``"y"``, ``"z"`` or
+    ``[x, y, z]``), ``parent`` (``"base"`` or an earlier joint's name; the previous joint when
+    omitted, so a list is a serial chain; several joints may share a parent: a tree), ``origin``,
+    the frame's fixed rotation as ``quat = [w, x, y, z]`` or URDF's ``rpy = [roll, pitch, yaw]``
+    [rad], ``mass``, ``com``, ``inertia`` (three principal moments, turned by ``inertia_quat =
+    [w, x, y, z]``, or the six numbers ``[ixx, iyy, izz, ixy, ixz, iyz]`` of the full tensor in the
+    link frame, MuJoCo's ``fullinertia`` order), ``armature``, ``initial_position``,
+    ``initial_velocity`` and the tables ``drive``, ``envelope``, ``load``, ``friction`` with the
+    one-joint file's keys.
 
     Raises:
         InputError: one line naming ``source``, the key, the value and what was expected.
@@ -310,7 +347,11 @@ def _read_chain_joint(
     check_keys(entry, _JOINT_KEYS, source, where)
     name = read_text(entry, "name", source) or f"joint{index}"
     kind = choice(entry, where, "type", ("revolute", "prismatic"), source)
-    axis = choice(entry, where, "axis", ("z", "x", "y"), source)
+    axis: str | Vector3 = "z"
+    if isinstance(entry.get("axis"), (list, tuple)):
+        axis = unit_vector(entry["axis"], f"{source}: key '{where}.axis'")
+    else:
+        axis = choice(entry, where, "axis", ("z", "x", "y"), source)
     parent_name = entry.get("parent", earlier[-1].name if earlier else "base")
     names = [joint.name for joint in earlier]
     if parent_name == "base":
@@ -326,10 +367,11 @@ def _read_chain_joint(
         if key not in entry:
             raise InputError(
                 f"{source}: missing required key '{where}.{key}' "
-                f"({'kg' if key == 'mass' else 'kg*m^2, 3 numbers'})"
+                f"({'kg' if key == 'mass' else 'kg*m^2, 3 principal or 6 full-tensor numbers'})"
             )
-    vectors = {key: _read_vector(entry, key, where, source, unit) for key, unit in
-               (("origin", "m"), ("com", "m"), ("inertia", "kg*m**2")) if key in entry}  # fmt: skip
+    vectors: dict[str, Any] = {key: _read_vector(entry, key, where, source, unit) for key, unit in
+                               (("origin", "m"), ("com", "m")) if key in entry}  # fmt: skip
+    vectors.update(_read_frames(entry, where, source))
     units = {
         "mass": "kg",
         "armature": unit_for(kind, "kg*m**2", "kg"),
@@ -370,6 +412,52 @@ def _read_vector(entry: Mapping[str, Any], key: str, where: str, source: str, un
             f"{source}: key '{where}.{key}': expected three numbers [x, y, z] ({unit}), got {value!r}"
         )
     return tuple(read_quantity(item, unit, f"{source}: key '{where}.{key}'") for item in value)  # type: ignore[return-value]
+
+
+def _read_quat(entry: Mapping[str, Any], key: str, where: str, source: str) -> Quaternion:
+    name = f"{source}: key '{where}.{key}'"
+    value = entry[key]
+    if not isinstance(value, (list, tuple)):
+        raise InputError(f"{name}: expected a quaternion [w, x, y, z], got {value!r}")
+    return quat_normalize(value, name)
+
+
+def _read_frames(entry: Mapping[str, Any], where: str, source: str) -> dict[str, Any]:
+    """The fixed rotation (``quat`` or ``rpy``) and the inertia (3 principal or 6 full numbers)."""
+    from drive_envelope._src.values import read_quantity
+
+    frames: dict[str, Any] = {}
+    if "quat" in entry and "rpy" in entry:
+        raise InputError(
+            f"{source}: key '{where}.rpy': give the frame's rotation once, as quat or as rpy, not both"
+        )
+    if "quat" in entry:
+        frames["quat"] = _read_quat(entry, "quat", where, source)
+    elif "rpy" in entry:
+        roll, pitch, yaw = _read_vector(entry, "rpy", where, source, "rad")
+        frames["quat"] = quat_from_rpy(roll, pitch, yaw)
+    value = entry["inertia"]
+    name = f"{source}: key '{where}.inertia'"
+    if not isinstance(value, (list, tuple)) or len(value) not in (3, 6):
+        raise InputError(
+            f"{name}: expected three principal moments [ixx, iyy, izz] or the six numbers "
+            f"[ixx, iyy, izz, ixy, ixz, iyz] (kg*m^2), got {value!r}"
+        )
+    numbers = [read_quantity(item, "kg*m**2", name) for item in value]
+    if len(numbers) == 3:
+        frames["inertia"] = tuple(numbers)
+        if "inertia_quat" in entry:
+            frames["inertia_quat"] = _read_quat(entry, "inertia_quat", where, source)
+        return frames
+    if "inertia_quat" in entry:
+        raise InputError(
+            f"{source}: key '{where}.inertia_quat': a full inertia tensor (6 numbers) has its axes "
+            "already; expected inertia_quat only with three principal moments"
+        )
+    ixx, iyy, izz, ixy, ixz, iyz = numbers
+    moments, axes = principal_inertia(((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz)), name)
+    frames["inertia"], frames["inertia_quat"] = moments, axes
+    return frames
 
 
 def load_stand(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> Scenario | ChainScenario:

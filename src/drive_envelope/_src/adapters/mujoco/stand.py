@@ -300,8 +300,10 @@ def _metadata(scenario: Scenario) -> dict[str, object]:
 def chain_spec(scenario: ChainScenario) -> tuple[mujoco.MjSpec, list[MjDrive]]:
     """A chain scenario as an ``MjSpec``: nested bodies, a plugin drive on every joint, PhysX's solver.
 
-    Each joint's body sits at its ``origin`` in its parent's body, with the link's mass, centre of
-    mass and principal inertia; gravity is along -Z; Euler integration. The plugin iterates the
+    Each joint's body sits at its ``origin`` in its parent's body, turned by the joint's ``quat``
+    (the body ``quat``), with the link's mass, centre of mass and principal inertia along
+    ``inertia_quat`` (the inertial ``quat``); the joint's axis is in the body's frame, as the
+    scenario's is; gravity is along -Z; Euler integration. The plugin iterates the
     drives as the scenario's PhysX solver does (``set_solver(spec, solver, position_iterations=,
     velocity_iterations=)``).
     """
@@ -319,11 +321,12 @@ def chain_spec(scenario: ChainScenario) -> tuple[mujoco.MjSpec, list[MjDrive]]:
     drives = []
     for joint in scenario.joints:
         parent = spec.worldbody if joint.parent < 0 else bodies[joint.parent]
-        body = parent.add_body(name=joint.name, pos=list(joint.origin), explicitinertial=True)
+        body = parent.add_body(name=joint.name, pos=list(joint.origin), quat=list(joint.quat),
+                               explicitinertial=True)  # fmt: skip
         body.mass, body.ipos, body.inertia = joint.mass, list(joint.com), list(joint.inertia)
+        body.iquat = list(joint.inertia_quat)
         bodies.append(body)
-        axis = [0.0, 0.0, 0.0]
-        axis[joint.axis_index] = 1.0
+        axis = list(joint.axis_vector)
         kind = mujoco.mjtJoint.mjJNT_HINGE if joint.type == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
         mj_joint = body.add_joint(name=joint.name, type=kind, axis=axis)
         mj_joint.armature = joint.armature

@@ -25,10 +25,12 @@ from drive_envelope._src.adapters.physx.chain_scene import (
     build_chain_stage,
     joint_path,
     link_path,
+    zero_pose,
 )
 from drive_envelope._src.adapters.physx.runner import _attached, _physx, _read_joints, _write
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
+from drive_envelope._src.scenario.chain_frames import rotate
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 
 __all__ = ["EFFORT_SOURCE", "simulate_chain"]
@@ -120,12 +122,13 @@ def _external_wrenches(scenario: ChainScenario) -> dict[str, np.ndarray]:
     world-frame wrench is exact for joints whose axis does not turn, as in planar chains.
     """
     wrenches: dict[str, np.ndarray] = {}
-    for joint in scenario.joints:
+    for joint, (orient, _) in zip(scenario.joints, zero_pose(scenario), strict=True):
         effort = joint.load.external_effort
         if effort == 0.0:
             continue
         wrench = np.zeros(9, dtype=np.float32)
-        wrench[(3 if joint.type == "revolute" else 0) + joint.axis_index] = effort
+        start = 3 if joint.type == "revolute" else 0
+        wrench[start : start + 3] = np.multiply(rotate(orient, joint.axis_vector), effort)
         targets = [(link_path(joint), 1.0)]
         if joint.parent >= 0:
             targets.append((link_path(scenario.joints[joint.parent]), -1.0))

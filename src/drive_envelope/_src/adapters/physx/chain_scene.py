@@ -5,9 +5,16 @@ Layout (1 m, 1 kg, Z up, gravity along -Z with the scenario's magnitude)::
     /World/physicsScene          PhysicsScene + PhysxSceneAPI (solver type, step rate)
     /World/chain                 ArticulationRootAPI + PhysxArticulationAPI (iteration counts)
     /World/chain/base            rigid body at the world origin, welded by /World/chain/rootJoint
-    /World/chain/<name>          one rigid body per joint, at its link frame's zero-position pose
-    /World/chain/<name>_joint    revolute (about) or prismatic (along) X, Y or Z, body0 the parent,
+    /World/chain/<name>          one rigid body per joint, at its link frame's zero-position pose,
+                                 mass, centre of mass, diagonalInertia and principalAxes
+    /World/chain/<name>_joint    revolute (about) or prismatic (along) its axis, body0 the parent,
                                  PhysicsDriveAPI + envelope, PhysxJointAxisAPI (armature, friction)
+
+A joint on a named axis of an unturned frame is authored as before (``physics:axis`` X, Y or Z,
+identity local rotations). Otherwise the joint frame carries the rotation: on body1 (the link)
+``localRot1`` turns PhysX's joint X axis onto the joint's axis, on body0 ``localRot0`` is the
+link frame's fixed rotation times that turn, so at zero position the two frames coincide and the
+link sits at its frame's pose.
 
 Every link has zero damping, ``cfmScale`` 0 and no velocity caps, as on the one-joint stand
 (:mod:`~drive_envelope._src.adapters.physx.scene`), so PhysX adds nothing the reference engine
@@ -21,13 +28,20 @@ import warnings
 from typing import TYPE_CHECKING
 
 from drive_envelope._src.adapters.physx.scene import _set
+from drive_envelope._src.scenario.chain_frames import (
+    IDENTITY,
+    Quaternion,
+    quat_multiply,
+    quat_taking_x_to,
+    rotate,
+)
 
 if TYPE_CHECKING:
     from pxr import Usd
 
     from drive_envelope._src.scenario.chain import ChainJoint, ChainScenario
 
-__all__ = ["CHAIN_PATH", "build_chain_stage", "joint_path", "link_path"]
+__all__ = ["CHAIN_PATH", "build_chain_stage", "joint_path", "link_path", "zero_pose"]
 
 CHAIN_PATH = "/World/chain"
 """Prim path of the articulation root."""
@@ -45,18 +59,34 @@ def joint_path(joint: ChainJoint) -> str:
     return f"{CHAIN_PATH}/{joint.name}_joint"
 
 
+def zero_pose(scenario: ChainScenario) -> list[tuple[Quaternion, tuple[float, float, float]]]:
+    """Each link frame's world rotation ``(w, x, y, z)`` and origin [m] at zero joint position."""
+    poses: list[tuple[Quaternion, tuple[float, float, float]]] = []
+    for joint in scenario.joints:
+        rotation, origin = poses[joint.parent] if joint.parent >= 0 else (IDENTITY, (0.0, 0.0, 0.0))
+        shift = rotate(rotation, joint.origin)
+        here = (origin[0] + shift[0], origin[1] + shift[1], origin[2] + shift[2])
+        poses.append((quat_multiply(rotation, joint.quat), here))
+    return poses
+
+
 def _body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[float, ...], com: tuple[float, ...],
-          translate: tuple[float, ...]) -> None:  # fmt: skip
+          translate: tuple[float, ...], orient: Quaternion = IDENTITY,
+          principal_axes: Quaternion = IDENTITY) -> None:  # fmt: skip
     from pxr import Gf, Sdf, UsdGeom, UsdPhysics
 
     xform = UsdGeom.Xform.Define(stage, path)
     xform.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*translate))
+    if orient != IDENTITY:
+        xform.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Quatd(orient[0], *orient[1:]))
     prim = xform.GetPrim()
     UsdPhysics.RigidBodyAPI.Apply(prim)
     mass_api = UsdPhysics.MassAPI.Apply(prim)
     mass_api.CreateMassAttr().Set(float(mass))
     mass_api.CreateDiagonalInertiaAttr().Set(Gf.Vec3f(*inertia))
     mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(*com))
+    if principal_axes != IDENTITY:
+        mass_api.CreatePrincipalAxesAttr().Set(Gf.Quatf(principal_axes[0], *principal_axes[1:]))
     prim.ApplyAPI("PhysxRigidBodyAPI")
     for name in ("linearDamping", "angularDamping", "cfmScale", "sleepThreshold", "stabilizationThreshold"):
         _set(prim, f"physxRigidBody:{name}", Sdf.ValueTypeNames.Float, 0.0)
@@ -109,12 +139,9 @@ def build_chain_stage(scenario: ChainScenario) -> Usd.Stage:
     _body(stage, _BASE, mass=1.0, inertia=(1.0, 1.0, 1.0), com=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0))
     fixed = UsdPhysics.FixedJoint.Define(stage, f"{CHAIN_PATH}/rootJoint")
     fixed.CreateBody1Rel().SetTargets([Sdf.Path(_BASE)])
-    origins: list[tuple[float, float, float]] = []
-    for joint in scenario.joints:
-        parent = (0.0, 0.0, 0.0) if joint.parent < 0 else origins[joint.parent]
-        here = (parent[0] + joint.origin[0], parent[1] + joint.origin[1], parent[2] + joint.origin[2])
-        origins.append(here)
-        _body(stage, link_path(joint), mass=joint.mass, inertia=joint.inertia, com=joint.com, translate=here)
+    for joint, (orient, here) in zip(scenario.joints, zero_pose(scenario), strict=True):
+        _body(stage, link_path(joint), mass=joint.mass, inertia=joint.inertia, com=joint.com, translate=here,
+              orient=orient, principal_axes=joint.inertia_quat)  # fmt: skip
         body0 = _BASE if joint.parent < 0 else link_path(scenario.joints[joint.parent])
         _joint(stage, joint, body0)
     return stage
@@ -128,11 +155,17 @@ def _joint(stage: Usd.Stage, spec: ChainJoint, body0: str) -> None:
     revolute = spec.type == "revolute"
     kind = UsdPhysics.RevoluteJoint if revolute else UsdPhysics.PrismaticJoint
     joint = kind.Define(stage, joint_path(spec))
-    joint.CreateAxisAttr().Set(spec.axis.upper())
+    # a named axis keeps its letter; any other axis is PhysX's X turned onto it by the joint frame
+    align = IDENTITY if isinstance(spec.axis, str) else quat_taking_x_to(spec.axis)
+    joint.CreateAxisAttr().Set(spec.axis.upper() if isinstance(spec.axis, str) else "X")
     joint.CreateBody0Rel().SetTargets([Sdf.Path(body0)])
     joint.CreateBody1Rel().SetTargets([Sdf.Path(link_path(spec))])
     joint.CreateLocalPos0Attr().Set(Gf.Vec3f(*spec.origin))
     joint.CreateLocalPos1Attr().Set(Gf.Vec3f(0.0, 0.0, 0.0))
+    rot0, rot1 = quat_multiply(spec.quat, align), align
+    if rot0 != IDENTITY or rot1 != IDENTITY:
+        joint.CreateLocalRot0Attr().Set(Gf.Quatf(rot0[0], *rot0[1:]))
+        joint.CreateLocalRot1Attr().Set(Gf.Quatf(rot1[0], *rot1[1:]))
     prim = joint.GetPrim()
     inst = "angular" if revolute else "linear"
     per_degree = math.pi / 180.0 if revolute else 1.0  # USD stores angular values per degree

@@ -5,8 +5,9 @@ joint-space mass matrix ``M(q)`` (with armature on its diagonal), whose inverse 
 unit response ``(M^-1)_ii`` (PhysX ``getImpulseSelfResponse``) and the propagation of one DOF's
 impulse to every joint (the column ``M^-1[:, i]``), and the bias ``h(q, v)`` (Coriolis, centrifugal
 and gravity efforts). ``M`` comes from the link Jacobians, ``h`` from one recursive Newton-Euler
-pass, both in world coordinates. The link frames are parallel to their parents' at zero joint
-position (see :mod:`~drive_envelope._src.scenario.chain`).
+pass, both in world coordinates. A link's frame is its parent's turned by the joint's fixed
+rotation and then by the joint about its axis in that frame (URDF's and MJCF's order; see
+:mod:`~drive_envelope._src.scenario.chain`).
 """
 
 from __future__ import annotations
@@ -17,15 +18,20 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.scenario.chain import ChainScenario
+from drive_envelope._src.scenario.chain_frames import quat_to_matrix
 
 __all__ = ["ChainModel", "Kinematics"]
 
 FloatArray = npt.NDArray[np.float64]
 
 
-def _rotation(axis: int, angle: float) -> FloatArray:
-    """Right-handed rotation by ``angle`` [rad] about the X, Y or Z axis (0, 1, 2)."""
+def _rotation(axis: int | None, vector: FloatArray, angle: float) -> FloatArray:
+    """Right-handed rotation by ``angle`` [rad] about the X, Y or Z axis (0, 1, 2) or a unit vector."""
     c, s = np.cos(angle), np.sin(angle)
+    if axis is None:  # Rodrigues: c*I + s*[a]x + (1 - c)*a*a'
+        x, y, z = vector
+        cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        return np.asarray(c * np.eye(3) + s * cross + (1.0 - c) * np.outer(vector, vector))
     i, j = (axis + 1) % 3, (axis + 2) % 3
     rotation = np.eye(3)
     rotation[i, i], rotation[i, j], rotation[j, i], rotation[j, j] = c, -s, s, c
@@ -56,11 +62,17 @@ class ChainModel:
         self.dofs = len(joints)
         self.parent = [joint.parent for joint in joints]
         self.axis = [joint.axis_index for joint in joints]
+        self.local_axis = np.array([joint.axis_vector for joint in joints], dtype=np.float64)
+        # the fixed rotation of each link frame in its parent's (identity: parallel frames)
+        self.fixed = np.array([quat_to_matrix(joint.quat) for joint in joints], dtype=np.float64)
+        self.turned = [joint.quat != (1.0, 0.0, 0.0, 0.0) for joint in joints]
         self.revolute = np.array([joint.type == "revolute" for joint in joints])
         self.origin = np.array([joint.origin for joint in joints], dtype=np.float64)
         self.local_com = np.array([joint.com for joint in joints], dtype=np.float64)
         self.mass = np.array([joint.mass for joint in joints], dtype=np.float64)
-        self.local_inertia = np.array([np.diag(joint.inertia) for joint in joints], dtype=np.float64)
+        principal = np.array([quat_to_matrix(joint.inertia_quat) for joint in joints], dtype=np.float64)
+        moments = np.array([np.diag(joint.inertia) for joint in joints], dtype=np.float64)
+        self.local_inertia = principal @ moments @ principal.transpose(0, 2, 1)
         self.armature = np.array([joint.armature for joint in joints], dtype=np.float64)
         self.gravity = np.array([0.0, 0.0, -scenario.simulation.gravity])
         # ancestors[k, j]: joint j moves link k (j is k or one of its ancestors)
@@ -81,12 +93,13 @@ class ChainModel:
             p = self.parent[k]
             parent_rotation = rotation[p] if p >= 0 else np.eye(3)
             parent_origin = origin[p] if p >= 0 else np.zeros(3)
-            axis[k] = parent_rotation[:, self.axis[k]]
+            frame = parent_rotation @ self.fixed[k] if self.turned[k] else parent_rotation
+            axis[k] = frame @ self.local_axis[k]
             origin[k] = parent_origin + parent_rotation @ self.origin[k]
             if self.revolute[k]:
-                rotation[k] = parent_rotation @ _rotation(self.axis[k], float(position[k]))
+                rotation[k] = frame @ _rotation(self.axis[k], self.local_axis[k], float(position[k]))
             else:
-                rotation[k] = parent_rotation
+                rotation[k] = frame
                 origin[k] += axis[k] * position[k]
         com = origin + np.einsum("kij,kj->ki", rotation, self.local_com)
         inertia = rotation @ self.local_inertia @ rotation.transpose(0, 2, 1)
