@@ -101,9 +101,27 @@ def fit_structure(
     if q == 0.0:  # a sample outside either half-plane is outside the envelope: each must hold all
         if "max_effort" not in fixed:
             cap = max(cap, float((y + slope * x).max()))
+        elif "velocity_dependent_resistance" not in fixed:
+            slope = min(slope, _containing_slope(x, y, cap))
         if "max_actuator_velocity" not in fixed:
             limit = max(limit, float((x + gradient * y).max()))
+        elif "speed_effort_gradient" not in fixed:
+            # a held intercept cannot move out to the samples on the other side of the split: the
+            # slope comes down instead (a fixed speed above every point left the stall point out)
+            gradient = min(gradient, _containing_slope(y, x, limit))
     return Model("both", cap, slope, limit, gradient, split, r_ok, g_ok)
+
+
+def _containing_slope(u: FloatArray, w: FloatArray, intercept: float) -> float:
+    """Largest slope of ``w <= intercept - slope*u`` holding every sample a slope >= 0 can hold.
+
+    Samples at or beyond the intercept are outside for every slope (cut off by the held value) and
+    do not bound it; inf when no sample does.
+    """
+    bounding = (u > 0.0) & (w < intercept)
+    if not bounding.any():
+        return math.inf
+    return float(((intercept - w[bounding]) / u[bounding]).min())
 
 
 def _fit_speed_line(x: FloatArray, y: FloatArray, q: float, fixed: Mapping[str, float]) -> Model:
