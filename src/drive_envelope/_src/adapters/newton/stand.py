@@ -5,19 +5,28 @@ The scenario's rigid inertia becomes one link whose inertia about the joint axis
 ``1/(inertia + armature)``. A ``[pendulum]`` point mass is folded into the same link (mass, centre
 of mass off the axis, inertia about it) under gravity along -Z, so gravity's effort is
 ``-m*g*d*sin(q + angle_offset)``; without one the stand has no gravity.
-The drive is Newton's own actuator stack: ``DrivePD`` (stiffness, damping, the scenario's applied
-effort as its feed-forward ``joint_act``, which PhysX counts as actuator effort) clamped by
-:class:`ClampingPerformanceEnvelope`, in Newton's implicit effort mode: the PD law and the clamp are
-solved at the end-of-step velocity and position, as PhysX's implicit drive and ``clampDriveImpulse``
-are. The external effort is not actuator effort: it is added to ``joint_f`` after the actuator.
-The implicit solve gets the forces from outside the actuator as ``bias_force`` (gravity from
-:class:`~drive_envelope._src.adapters.newton.bias.BiasForce`, minus the external effort), so it
-predicts the end-of-step velocity the solver will reach. PhysX's joint friction has no Newton
-counterpart in Featherstone: a scenario with ``[friction]`` is refused.
+The drive runs as the scenario's PhysX solver iterates it (``drive="physx"``, the default and what
+``simulate --engine newton`` runs): :mod:`~drive_envelope._src.adapters.newton.physx_drive`'s Warp
+kernel computes the step's drive effort, PGS's sweeps or TGS's substeps with their iteration
+counts, with the joint's response from Newton's mass matrix (``JointSpaceResponse``) and the loads
+from :class:`~drive_envelope._src.adapters.newton.bias.BiasForce` (gravity, minus the external
+effort); Newton gets it as joint effort (``joint_f``, with the external effort), and after the step
+the joint's position is moved to the one PhysX integrates (as the MuJoCo plugin does). On every
+shipped scenario, PGS and TGS, that is the reference to float32 rounding (``docs/parity.md``).
 
-``SolverFeatherstone`` integrates semi-implicitly (``v1 = v0 + a*dt``, ``q1 = q0 + v1*dt``): one
-solve per step, what PhysX's PGS does for an isolated DOF. A TGS scenario still runs here (one solve
-per step) and its metadata says so. Newton computes in float32 (the implicit solve in float64).
+``drive="actuator"`` runs Newton's own actuator stack instead: ``DrivePD`` (stiffness, damping, the
+scenario's applied effort as its feed-forward ``joint_act``, which PhysX counts as actuator
+effort) clamped by :class:`ClampingPerformanceEnvelope`, in Newton's implicit effort mode: the PD
+law and the clamp are solved at the end-of-step velocity and position, as PhysX's implicit drive
+and ``clampDriveImpulse`` are. The external effort is not actuator effort: it is added to
+``joint_f`` after the actuator. The implicit solve gets the forces from outside the actuator as
+``bias_force`` (gravity from :class:`BiasForce`, minus the external effort), so it predicts the
+end-of-step velocity the solver will reach. That is one solve per step, what PhysX's PGS does for
+an isolated DOF; on a TGS scenario it warns with the measured size of the difference.
+
+PhysX's joint friction has no Newton counterpart in Featherstone: a scenario with ``[friction]``
+is refused. ``SolverFeatherstone`` integrates semi-implicitly (``v1 = v0 + a*dt``, ``q1 = q0 +
+v1*dt``). Newton computes in float32 (the drive kernel and the implicit solve in float64).
 """
 
 from __future__ import annotations
@@ -25,7 +34,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -35,8 +44,10 @@ from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["MAX_VALUE", "MIN_INERTIA", "simulate"]
+__all__ = ["DRIVES", "MAX_VALUE", "MIN_INERTIA", "simulate"]
 
+DRIVES = ("physx", "actuator")
+"""How the stand's drive runs: PhysX's PGS/TGS iteration (a Warp kernel), or Newton's actuator stack."""
 MIN_INERTIA = 1e-12
 """Smallest inertia [kg*m^2 or kg] the stand accepts: Newton inverts the float32 mass matrix."""
 MAX_VALUE = 1e30
@@ -100,8 +111,8 @@ def _clamping(scenario: Scenario, clamp_class: type) -> list[tuple[type, dict[st
     return [(clamp_class, {field: float(getattr(envelope, field)) for field in ENVELOPE_FIELDS})]
 
 
-def _build(scenario: Scenario) -> Any:
-    """The stand as a finalized ``newton.Model`` with one actuator on DOF 0."""
+def _build(scenario: Scenario, *, actuator: bool) -> Any:
+    """The stand as a finalized ``newton.Model``, with Newton's actuator on DOF 0 when ``actuator``."""
     import newton
     import warp as wp
     from newton.actuators import DrivePD
@@ -124,8 +135,9 @@ def _build(scenario: Scenario) -> Any:
             parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
         )
     builder.add_articulation([joint])
-    kp, kd = _gains(scenario)
-    builder.add_actuator(DrivePD, index=0, kp=kp, kd=kd, clamping=_clamping(scenario, build()))
+    if actuator:
+        kp, kd = _gains(scenario)
+        builder.add_actuator(DrivePD, index=0, kp=kp, kd=kd, clamping=_clamping(scenario, build()))
     return builder.finalize(device="cpu")
 
 
@@ -152,42 +164,47 @@ def _array(value: float) -> Any:
     return wp.array(np.array([value], dtype=np.float32), dtype=wp.float32, device="cpu")
 
 
-def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> Trajectory:
-    """Run ``scenario`` on Newton (Featherstone, implicit actuator); ``steps + 1`` rows, row 0 the start.
+def simulate(
+    scenario: Scenario,
+    progress: Callable[[int, int], None] | None = None,
+    *,
+    drive: Literal["physx", "actuator"] = "physx",
+) -> Trajectory:
+    """Run ``scenario`` on Newton (Featherstone); ``steps + 1`` rows, row 0 the start.
 
     Args:
         scenario: The validated scenario.
         progress: Called as ``progress(done, total)`` every 1000 steps and at the end.
+        drive: ``"physx"``: the scenario's PhysX solver (PGS or TGS, its iteration counts) computes
+            the drive effort; ``"actuator"``: Newton's ``DrivePD`` + ``ClampingPerformanceEnvelope``
+            in implicit mode, one solve per step.
 
     Raises:
-        InputError: a value Newton's float32 model cannot hold, or a state that diverged.
+        InputError: a value Newton's float32 model cannot hold, a state that diverged, or an
+            unknown ``drive``.
     """
     from drive_envelope._src.kernels.warp_setup import quiet_warp
 
+    if drive not in DRIVES:
+        raise InputError(f"newton stand: argument 'drive' = {drive!r}: expected 'physx' or 'actuator'")
     _check(scenario)
-    note = one_solve_tgs_note("newton", scenario.simulation.solver)
-    if note is not None:
-        warnings.warn(note, EngineWarning, stacklevel=2)
+    if drive == "actuator":
+        note = one_solve_tgs_note("newton", scenario.simulation.solver)
+        if note is not None:
+            warnings.warn(note, EngineWarning, stacklevel=2)
     with quiet_warp():
-        return _run(scenario, progress)
+        return _run(scenario, progress, drive)
 
 
-def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Trajectory:
+def _run(scenario: Scenario, progress: Callable[[int, int], None] | None, drive: str) -> Trajectory:
     """Build the stand and step it (inside :func:`quiet_warp`)."""
     import newton
-    from newton.actuators import Actuator, JointSpaceResponse
+    from newton.actuators import JointSpaceResponse
 
     from drive_envelope._src.adapters.newton.bias import BiasForce
 
-    model = _build(scenario)
-    actuator = model.actuators[0]
+    model = _build(scenario, actuator=drive == "actuator")
     response = JointSpaceResponse(model)
-    actuator.set_effort_mode_implicit(
-        response=response,
-        options=Actuator.ImplicitOptions(
-            max_iters=_SOLVE_ITERATIONS, residual_tol=_SOLVE_TOLERANCE, update_tol=_SOLVE_TOLERANCE
-        ),
-    )
     solver = newton.solvers.SolverFeatherstone(model)
     state_in, state_out, control = model.state(), model.state(), model.control()
     state_in.joint_q.assign(np.array([scenario.joint.initial_position], dtype=np.float32))
@@ -196,23 +213,24 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
     control.joint_target_q.assign(np.array([scenario.drive.target_position], dtype=np.float32))
     control.joint_target_qd.assign(np.array([scenario.drive.target_velocity], dtype=np.float32))
     control.joint_act.assign(np.array([scenario.load.applied_effort], dtype=np.float32))
-    external = scenario.load.external_effort
-    load = _array(external)
+    load = _array(scenario.load.external_effort)
     bias = BiasForce(model, coriolis=False)  # one DOF on a fixed base: no Coriolis force
+    # the manipulator equation's bias (tau = M qdd + b): gravity, minus the load from outside
+    if drive == "physx":
+        effort_of = _physx_drive(scenario, model, response, bias, load)
+    else:
+        effort_of = _actuator_drive(scenario, model, response, bias, load)
     count = scenario.simulation.steps
     dt = scenario.simulation.dt
     position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
     position[0], velocity[0] = scenario.joint.initial_position, scenario.joint.initial_velocity
-    let_go = _LetGo(scenario)
+    let_go = _LetGo(scenario) if drive == "actuator" else None
     for i in range(1, count + 1):
-        control.joint_f.zero_()
-        response.refresh(state_in)
-        # the manipulator equation's bias (tau = M qdd + b): gravity, minus the load from outside
-        actuator.step(state_in, control, dt=dt, bias_force=bias.compute(state_in, external=load))
-        effort[i] = float(control.joint_f.numpy()[0])
-        control.joint_f.assign(np.array([effort[i] + external], dtype=np.float32))
+        effort[i], after = effort_of(state_in, control)
         solver.step(state_in, state_out, control, None, dt)  # type: ignore[arg-type]  # no contacts
         state_in, state_out = state_out, state_in
+        if after is not None:
+            after(state_in)
         position[i] = float(state_in.joint_q.numpy()[0])
         velocity[i] = float(state_in.joint_qd.numpy()[0])
         if not (math.isfinite(position[i]) and math.isfinite(velocity[i])):
@@ -220,10 +238,12 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
                 f"{_where(scenario)}: Newton's state diverged at step {i} (t = {i * dt:.6g} s): "
                 "check dt, inertia, gains and loads"
             )
-        let_go.see(i, position[i], velocity[i], effort[i])
+        if let_go is not None:
+            let_go.see(i, position[i], velocity[i], effort[i])
         if progress is not None and (i % 1000 == 0 or i == count):
             progress(i, count)
-    let_go.report(dt)
+    if let_go is not None:
+        let_go.report(dt)
     return Trajectory(
         time=np.arange(count + 1, dtype=np.float64) * dt,
         position=position,
@@ -232,8 +252,71 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None) -> Tra
         joint=scenario.joint.type,
         engine="newton",
         name=scenario.name,
-        metadata=_metadata(scenario),
+        metadata=_metadata(scenario, drive),
     )
+
+
+_StepEffort = Callable[[Any, Any], tuple[float, Callable[[Any], None] | None]]
+"""Per step: writes ``control.joint_f`` from the start state, returns the actuator effort [N*m or
+N] and what to do to the state after the solver step (or None)."""
+
+
+def _physx_drive(scenario: Scenario, model: Any, response: Any, bias: Any, load: Any) -> _StepEffort:
+    """The drive as the scenario's PhysX solver iterates it (:mod:`physx_drive`'s kernel)."""
+    import newton
+    import warp as wp
+
+    from drive_envelope._src.adapters.newton import physx_drive
+
+    sim, drive = scenario.simulation, scenario.drive
+    envelope = scenario.effective_envelope()
+    on = drive.max_effort != 0.0  # PhysX: maxForce = 0 turns the drive off
+    row = [drive.stiffness, drive.damping, 0.0, math.inf, 0.0, 0.0]
+    if envelope is not None:
+        row[2:] = [getattr(envelope, field) for field in physx_drive.PARAMS[2:]]
+    flags = [int(sim.solver == "tgs"), sim.position_iterations, sim.velocity_iterations,
+             int(drive.type == "acceleration"), int(on), int(envelope is not None)]  # fmt: skip
+    params: Any = wp.array(np.array([row], dtype=np.float64), dtype=wp.float64, device="cpu")
+    flag_array: Any = wp.array(np.array([flags], dtype=np.int32), dtype=wp.int32, device="cpu")
+    effort = wp.zeros(1, dtype=wp.float64, device="cpu")
+    shift = wp.zeros(1, dtype=wp.float64, device="cpu")
+    dt = sim.dt
+
+    def after(state: Any) -> None:
+        physx_drive.shift_positions(state, shift)
+        newton.eval_fk(model, state.joint_q, state.joint_qd, state)  # the bodies at the moved position
+
+    def step(state: Any, control: Any) -> tuple[float, Callable[[Any], None] | None]:
+        response.refresh(state)
+        physx_drive.launch_drive(state, control, response.inverse_blocks, bias.compute(state, external=load),
+                                 load, params, flag_array, dt, effort, shift)  # fmt: skip
+        return float(effort.numpy()[0]), after
+
+    return step
+
+
+def _actuator_drive(scenario: Scenario, model: Any, response: Any, bias: Any, load: Any) -> _StepEffort:
+    """Newton's ``DrivePD`` + ``ClampingPerformanceEnvelope``, implicit: one solve per step."""
+    from newton.actuators import Actuator
+
+    actuator = model.actuators[0]
+    actuator.set_effort_mode_implicit(
+        response=response,
+        options=Actuator.ImplicitOptions(
+            max_iters=_SOLVE_ITERATIONS, residual_tol=_SOLVE_TOLERANCE, update_tol=_SOLVE_TOLERANCE
+        ),
+    )
+    dt, external = scenario.simulation.dt, scenario.load.external_effort
+
+    def step(state: Any, control: Any) -> tuple[float, Callable[[Any], None] | None]:
+        control.joint_f.zero_()
+        response.refresh(state)
+        actuator.step(state, control, dt=dt, bias_force=bias.compute(state, external=load))
+        effort = float(control.joint_f.numpy()[0])
+        control.joint_f.assign(np.array([effort + external], dtype=np.float32))
+        return effort, None
+
+    return step
 
 
 class _LetGo:
@@ -306,20 +389,25 @@ def _can_brake(envelope: PerformanceEnvelope, speed: float, response: float, req
     return 0.0 < high and low <= high
 
 
-def _metadata(scenario: Scenario) -> dict[str, object]:
+def _metadata(scenario: Scenario, drive: str) -> dict[str, object]:
     import newton
 
     sim = scenario.simulation
-    note = "Featherstone, implicit actuator: one implicit drive solve per step (PhysX PGS, isolated DOF)"
-    if sim.solver == "tgs":
-        note += "; PhysX TGS integrates and clamps per substep, so transients differ"
-    return {
+    data: dict[str, object] = {
         "solver": sim.solver,
         "dt": sim.dt,
+        "position_iterations": sim.position_iterations,
+        "velocity_iterations": sim.velocity_iterations,
         "newton_version": str(newton.__version__),
         "newton_solver": "SolverFeatherstone",
-        "effort_mode": "implicit",
-        "clamp": "ClampingPerformanceEnvelope",
-        "note": note,
-        "unlimited_effort": math.isinf(scenario.drive.max_effort),
+        "drive": drive,
     }
+    if drive == "physx":
+        data["drive_solver"] = sim.solver
+        data["effort_source"] = "PhysX's drive iteration (Warp kernel), applied as joint_f"
+    else:
+        data["effort_mode"] = "implicit"
+        data["clamp"] = "ClampingPerformanceEnvelope"
+        data["note"] = "one implicit drive solve per step (PhysX PGS for an isolated DOF)"
+    data["unlimited_effort"] = math.isinf(scenario.drive.max_effort)
+    return data

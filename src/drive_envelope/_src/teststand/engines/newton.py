@@ -1,8 +1,9 @@
-"""The ``newton`` engine: the test stand as a one-DOF Newton model (Featherstone, implicit actuator).
+"""The ``newton`` engine: the test stand as a one-DOF Newton model on ``SolverFeatherstone``.
 
-See :mod:`drive_envelope._src.adapters.newton.stand` for the model: Newton's ``DrivePD`` clamped by
-``ClampingPerformanceEnvelope`` in Newton's implicit effort mode, with a ``[pendulum]`` and
-``joint.armature``; ``[friction]`` and drive schedules are refused. It needs the ``newton`` extra.
+See :mod:`drive_envelope._src.adapters.newton.stand` for the model: the drive computed as the
+scenario's PhysX solver (PGS or TGS, its iteration counts) iterates it, in a Warp kernel, and
+applied as joint effort, with a ``[pendulum]`` and ``joint.armature``; ``[friction]`` and drive
+schedules are refused. It needs the ``newton`` extra.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ LOADS = ("pendulum", "armature")
 
 
 def simulate(scenario: Scenario, progress: ProgressCallback | None = None) -> Trajectory:
-    """Run ``scenario`` in Newton (float32: agreement with ``reference`` to float32 precision on PGS)."""
+    """Run ``scenario`` in Newton (float32: the reference to float32 precision, PGS and TGS)."""
     from drive_envelope._src.adapters.newton.stand import simulate as run
 
     return run(scenario, progress=progress)
