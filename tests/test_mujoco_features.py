@@ -256,17 +256,34 @@ def test_set_envelope_and_set_gains_refuse_bad_input(mujoco: Any) -> None:
     assert get_gains(model, "drive") == (10.0, 3.0)
 
 
-def test_plugin_state_reports_the_solve(mujoco: Any) -> None:
-    """Report the solve's iterations and row solves of the last step in the leader's plugin state."""
+def test_solver_stats_report_the_solve_and_the_plugin_has_no_state(mujoco: Any) -> None:
+    """The solve's iterations and drive solves of the last step; none of it is MuJoCo state."""
+    from drive_envelope.mujoco import solver_stats
+
     model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="1 -1 0 0 1000 0", extra=""))
     data = mujoco.MjData(model)
+    # as MuJoCo's pid: a saved mjSTATE_FULLPHYSICS holds time, qpos, qvel (and act) only
+    assert model.npluginstate == 0
+    full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    assert mujoco.mj_stateSize(model, full) == 1 + model.nq + model.nv + model.na
     data.ctrl[0] = 0.0
     mujoco.mj_step(model, data)
-    assert data.plugin_state.tolist() == [0.0, 0.0]  # inside the envelope: the linear solve is it
+    assert solver_stats(model, data) == (0, 0)  # inside the envelope: the linear solve is it
     data.ctrl[0] = 1.0
     mujoco.mj_step(model, data)
     # saturated: a Newton step (clamp, two slope probes), then a second clamp that confirms it
-    assert data.plugin_state.tolist() == [2.0, 4.0]
+    assert solver_stats(model, data) == (2, 4)
+    mujoco.mj_resetData(model, data)
+    assert solver_stats(model, data) == (0, 0)
+
+
+def test_solver_stats_need_a_model_with_drives(mujoco: Any) -> None:
+    """A model without the plugin is a one-line error naming the plugin."""
+    from drive_envelope.mujoco import solver_stats
+
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+    with pytest.raises(InputError, match=r"no instance of the 'drive_envelope\.envelope' plugin"):
+        solver_stats(model, mujoco.MjData(model))
 
 
 def test_domain_randomization_example_gives_each_model_its_own_envelope(mujoco: Any) -> None:

@@ -444,11 +444,8 @@ Envelope::~Envelope() = default;
 
 void Envelope::Compute(const mjModel* m, mjData* d, int instance) {
   if (!solver_) return;
-  int sweeps = solver_->Compute(m, d);
-  if (m->plugin_statenum[instance] >= 2) {
-    d->plugin_state[m->plugin_stateadr[instance]] = sweeps;
-    d->plugin_state[m->plugin_stateadr[instance] + 1] = solver_->solves();
-  }
+  last_iterations_ = solver_->Compute(m, d);
+  last_solves_ = solver_->solves();
 }
 
 void Envelope::Advance(const mjModel* m, mjData* d) {
@@ -467,11 +464,9 @@ void Envelope::RegisterPlugin() {
   plugin.nattribute = sizeof(attributes) / sizeof(attributes[0]);
   plugin.attributes = attributes;
 
-  // the leader's two state numbers (diagnostics, not state): the Gauss-Seidel sweeps of its last
-  // computation, and the rows they solved (clamp evaluations)
-  plugin.nstate = +[](const mjModel* m, int instance) {
-    return instance == LeaderInstance(m) ? 2 : 0;
-  };
+  // no state: the drives are a function of (qpos, qvel, ctrl, the model); diagnostics live in the
+  // instance (drive_envelope_solver_stats), so a saved mjSTATE_FULLPHYSICS restores the physics alone
+  plugin.nstate = +[](const mjModel* m, int instance) { return 0; };
   plugin.init = +[](const mjModel* m, mjData* d, int instance) {
     std::unique_ptr<Envelope> envelope = Envelope::Create(m, d, instance);
     if (envelope == nullptr) return -1;
@@ -483,7 +478,7 @@ void Envelope::RegisterPlugin() {
     d->plugin_data[instance] = 0;
   };
   plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {
-    for (int k = 0; k < m->plugin_statenum[instance]; k++) plugin_state[k] = 0;
+    if (plugin_data != nullptr) reinterpret_cast<Envelope*>(plugin_data)->ResetStats();
   };
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
     reinterpret_cast<Envelope*>(d->plugin_data[instance])->Compute(m, d, instance);

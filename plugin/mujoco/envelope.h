@@ -121,10 +121,19 @@ class Envelope {
   // adds the plugin to MuJoCo's global registry
   static void RegisterPlugin();
 
+  // diagnostics of the leader's last computation (0 for other instances): the iterations (Newton
+  // steps plus Gauss-Seidel sweeps) and the drive solves (clamp evaluations) they took. Kept here,
+  // not in plugin_state, so mjSTATE_FULLPHYSICS holds physics only (as MuJoCo's pid: nstate 0).
+  int last_iterations() const { return last_iterations_; }
+  int last_solves() const { return last_solves_; }
+  void ResetStats() { last_iterations_ = last_solves_ = 0; }
+
  private:
   explicit Envelope(std::unique_ptr<CoupledSolver> solver);
 
   std::unique_ptr<CoupledSolver> solver_;  // leader only
+  int last_iterations_ = 0;
+  int last_solves_ = 0;
 };
 
 // the lowest instance of this plugin in m (the leader), or -1

@@ -1,12 +1,13 @@
 // Copyright 2026 The drive-envelope authors. BSD-3-Clause.
 //
 // C entry points for tests and tools (ctypes): the C++ drive math on plain numbers (the clamp in
-// its guarded default and in PhysX's exact arithmetic), and the MuJoCo version the library was
-// built against.
+// its guarded default and in PhysX's exact arithmetic), the MuJoCo version the library was built
+// against, and the solver's diagnostics of an instance.
 
 #include <mujoco/mujoco.h>
 
 #include "drive_math.h"
+#include "envelope.h"
 
 namespace dm = drive_envelope::mujoco_plugin;
 
@@ -59,6 +60,17 @@ __attribute__((visibility("default"))) double drive_envelope_implicit_drive_effo
   return dm::ImplicitDriveEffort(stiffness, damping, position_error, velocity, target_velocity,
                                  response, dt,
                                  drive_type ? dm::DriveType::kAcceleration : dm::DriveType::kForce);
+}
+
+// the leader instance's diagnostics of its last computation (iterations, drive solves), from its
+// mjData::plugin_data entry; 0 on success, -1 for a null instance
+__attribute__((visibility("default"))) int drive_envelope_solver_stats(const void* instance_data,
+                                                                     int* iterations, int* solves) {
+  if (instance_data == nullptr) return -1;
+  const auto* envelope = static_cast<const drive_envelope::mujoco_plugin::Envelope*>(instance_data);
+  *iterations = envelope->last_iterations();
+  *solves = envelope->last_solves();
+  return 0;
 }
 
 }  // extern "C"

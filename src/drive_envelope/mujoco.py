@@ -44,6 +44,7 @@ from drive_envelope._src.adapters.mujoco.solver import (
 )
 from drive_envelope._src.adapters.mujoco.spec import INPUTS, MjDrive, add_drive, add_drives, plugin_config
 from drive_envelope._src.adapters.mujoco.stand import stand_spec
+from drive_envelope._src.adapters.mujoco.stats import SolverStats, solver_stats
 
 __all__ = [
     "BUILD_COMMAND",
@@ -58,6 +59,7 @@ __all__ = [
     "MjDriveInfo",
     "MjSolver",
     "PluginError",
+    "SolverStats",
     "add_drive",
     "add_drives",
     "build_plugin",
@@ -75,6 +77,7 @@ __all__ = [
     "set_envelope",
     "set_gains",
     "set_solver",
+    "solver_stats",
     "stand_spec",
     "write_mjcf",
 ]

@@ -101,7 +101,7 @@ class EnvelopeDrives:
         """Record each world's (iterations, drive solves) from the next step on; returns the array.
 
         Iterations are Newton steps plus Gauss-Seidel sweeps (0: the linear solve was inside every
-        envelope), as the C plugin's ``plugin_state`` reports them. Call it before capturing a graph.
+        envelope), as the C plugin's ``solver_stats`` reports them. Call it before capturing a graph.
         """
         import warp as wp
 
