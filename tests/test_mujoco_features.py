@@ -277,6 +277,56 @@ def test_solver_stats_report_the_solve_and_the_plugin_has_no_state(mujoco: Any) 
     assert solver_stats(model, data) == (0, 0)
 
 
+def test_copy_data_steps_as_the_original(mujoco: Any) -> None:
+    """mj_copyData gives an independent drive (its own instance) that steps bit for bit alike."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="1 -1 0 0 100 5", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 1.0
+    for _ in range(3):
+        mujoco.mj_step(model, data)
+    copy = mujoco.MjData(model)
+    mujoco.mj_copyData(copy, model, data)
+    for _ in range(20):
+        mujoco.mj_step(model, data)
+        mujoco.mj_step(model, copy)
+    assert copy.qvel.tolist() == data.qvel.tolist()
+    assert copy.actuator_force.tolist() == data.actuator_force.tolist()
+
+
+@pytest.mark.parametrize(
+    ("ctrl", "dv_dctrl"),
+    [
+        # inside the envelope: dv1/dctrl = h/I * k/(1 + (h*k + c)*h/I), the implicit PD law by hand
+        (0.005, 0.01 / 0.5 * 100.0 / (1.0 + (0.01 * 100.0 + 5.0) * 0.01 / 0.5)),
+        (1.0, 0.0),  # saturated at max_effort = 1 N*m: the effort does not move with the target
+    ],
+)
+def test_finite_differences_see_the_drive_law(mujoco: Any, ctrl: float, dv_dctrl: float) -> None:
+    """mjd_transitionFD through the plugin: the control derivative is the drive law's, 0 when clamped."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="1 -1 0 0 100 5", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = ctrl
+    nx = 2 * model.nv + model.na
+    a, b = np.zeros((nx, nx)), np.zeros((nx, model.nu))
+    mujoco.mjd_transitionFD(model, data, 1e-6, 1, a, b, None, None)
+    h = model.opt.timestep
+    np.testing.assert_allclose(b[:, 0], [h * dv_dctrl, dv_dctrl], rtol=1e-6, atol=1e-9)
+
+
+def test_keyframe_reset_starts_the_drive_from_the_keyframe(mujoco: Any) -> None:
+    """mj_resetDataKeyframe: qpos and ctrl from the keyframe; the first step is the drive law from there."""
+    xml = ONE.format(dynprm="5 -1 0 0 100 5", extra="").replace(
+        "</actuator>", '</actuator><keyframe><key qpos="0.3" ctrl="0.32"/></keyframe>'
+    )
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    mujoco.mj_step(model, data)
+    k, c, h, inertia = 100.0, 5.0, 0.01, 0.5
+    expected = k * (0.32 - 0.3) / (1.0 + (h * k + c) * h / inertia)  # from rest, inside max_effort 5
+    assert data.actuator_force[0] == pytest.approx(expected, rel=1e-12)
+
+
 def test_solver_stats_need_a_model_with_drives(mujoco: Any) -> None:
     """A model without the plugin is a one-line error naming the plugin."""
     from drive_envelope.mujoco import solver_stats
