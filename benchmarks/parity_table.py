@@ -4,9 +4,10 @@ Runs every shipped test-stand scenario (``examples/scenarios/*.toml``) on the ``
 (the float64 model of PhysX's solver) and on each other engine installed here:
 
 * ``physx``: real PhysX 5.6 (ovphysx 0.7, CPU, float32), the engine the model is of;
-* ``mujoco``: the ``drive_envelope.envelope`` plugin (C++, float64), one implicit solve per step;
-* ``newton``: Newton's ``DrivePD`` + ``ClampingPerformanceEnvelope`` in implicit mode on
-  ``SolverFeatherstone`` (float32);
+* ``mujoco``: the ``drive_envelope.envelope`` plugin (C++, float64) iterating the drive as the
+  scenario's PhysX solver does (``set_solver``: PGS sweeps or TGS substeps, the scenario's counts);
+* ``newton``: ``SolverFeatherstone`` (float32) with the drive's effort computed as the scenario's
+  PhysX solver iterates it (a Warp kernel, float64 inside) and applied as joint effort;
 * ``warp`` / ``torch``: the reference's own solver loop with its NumPy ``clamp_drive_impulse``
   replaced by the Warp / torch port in float32, closed loop (each step starts from the state the
   float32 clamp produced): the batched clamps on the exact calls the solver makes.
@@ -15,10 +16,10 @@ For each scenario and engine it reports the largest ``|difference|`` over all st
 effort and position, and the worst of the three divided by its tolerance; ``<= 1`` passes. The
 tolerances are those of the engines' own tests: the mujoco engine's (velocity ``1e-5 +
 5e-5*max|v|``, effort ``1e-4 + 1e-3*max_effort``, position ``1e-5 + 1e-4*path length``) for
-mujoco, newton, warp and torch; ``3e-3 * max(1, max|column|)`` for real PhysX, whose float32
-noise is amplified about a thousandfold by braking along eq. 2 (``tests/test_teststand_physx.py``).
-mujoco and newton take one solve per step, so on TGS scenarios only their steady states agree
-(``docs/teststand.md``); their TGS rows are shown, not held to the tolerance.
+mujoco, warp, torch and newton on PGS; ``3e-3 * max(1, max|column|)`` for real PhysX, whose float32
+noise is amplified about a thousandfold by braking along eq. 2 (``tests/test_teststand_physx.py``),
+and for newton on TGS, whose float32 state the substeps' clamps amplify the same way
+(``step_response_tgs``: 3.4e-4 rad/s, real PhysX 2.0e-3). Every row is held.
 ``docs/parity.md`` is written by this script (``--write``) and checked by
 ``tests/test_parity_engines.py``.
 
@@ -35,6 +36,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 from unittest import mock
 
 import numpy as np
@@ -43,8 +45,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "examples" / "scenarios"
 DOC = ROOT / "docs" / "parity.md"
 ENGINES = ("physx", "mujoco", "newton", "warp", "torch")
-HELD_ON_TGS = ("physx", "warp", "torch")
-"""Engines that model TGS as PhysX runs it (the others take one solve per step)."""
+HELD_ON_TGS = ("physx", "mujoco", "newton", "warp", "torch")
+"""Engines that model TGS as PhysX runs it: all of them (mujoco and newton with the scenario's solver)."""
+FLOAT32_STATE = ("physx",)
+"""Engines held to the float32 tolerance on every scenario; newton on TGS scenarios too."""
 NEEDS = {"physx": "ovphysx", "mujoco": "mujoco", "newton": "newton", "warp": "warp", "torch": "torch"}
 BEGIN, END = "<!-- parity-table:begin -->", "<!-- parity-table:end -->"
 
@@ -73,7 +77,8 @@ class Row:
 
 def tolerances(engine: str, scenario: object, ref: object) -> tuple[float, float, float]:
     """The per-step tolerances (velocity, effort, position) of ``engine`` for a reference run."""
-    if engine == "physx":
+    tgs = scenario.simulation.solver == "tgs"  # type: ignore[attr-defined]
+    if engine in FLOAT32_STATE or (engine == "newton" and tgs):
         return tuple(  # type: ignore[return-value]
             3e-3 * max(1.0, float(np.abs(getattr(ref, column)).max()))
             for column in ("velocity", "effort", "position")
@@ -209,47 +214,136 @@ def write(rows: Sequence[Row]) -> None:
 
 
 CHAINS = sorted((Path(__file__).resolve().parent.parent / "examples" / "scenarios" / "chains").glob("*.toml"))
-"""The multi-DOF scenarios of the robot-scale table (``--chains``)."""
+"""The multi-DOF scenario files of the robot-scale table (``--chains``)."""
+CHAIN_BEGIN, CHAIN_END = "<!-- chain-table:begin -->", "<!-- chain-table:end -->"
 
 
-def _release(effort: object, max_effort: float) -> int:
+def _robot_chains() -> object:
+    """``benchmarks/robot_chains.py`` (the FR3 and Go2 stands built from ../shared/data)."""
+    spec = importlib.util.spec_from_file_location("robot_chains", Path(__file__).with_name("robot_chains.py"))
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def chain_scenarios() -> list[object]:
+    """The robot-scale scenarios: the chain files, then each robot stand whose asset is here (PGS, TGS)."""
+    from drive_envelope._src.scenario.chain import load_stand
+
+    robots: Any = _robot_chains()
+    found: list[object] = [load_stand(path) for path in CHAINS]
+    for robot in robots.ROBOTS:
+        if robots.available(robot):
+            found.extend(robots.scenario(robot, solver) for solver in robots.SOLVERS)
+    return found
+
+
+def released_joint(scenario: object, velocity: object) -> int:
+    """The joint that goes furthest past its speed line (``max |v| / max_actuator_velocity``)."""
+    ratios = []
+    for index, joint in enumerate(scenario.joints):  # type: ignore[attr-defined]
+        envelope = joint.effective_envelope()
+        speed = math.inf if envelope is None else envelope.max_actuator_velocity
+        ratios.append(float(np.abs(np.asarray(velocity)[:, index]).max()) / speed)
+    return int(np.argmax(ratios))
+
+
+def release_step(effort: object, max_effort: float) -> int:
     """First step at which a joint's drive effort is 0 (|effort| < 1e-4 * max_effort): it let go."""
-    import numpy as np
-
     hits = np.flatnonzero(np.abs(np.asarray(effort)[1:]) < 1e-4 * max_effort)
     return int(hits[0]) + 1 if hits.size else -1
 
 
-def chain_rows(engines: Sequence[str]) -> str:
-    """The robot-scale table: per chain scenario and engine, against real PhysX, on the first joint.
+@dataclass(frozen=True, kw_only=True, slots=True)
+class ChainRow:
+    """One engine on one multi-DOF scenario against real PhysX."""
 
-    Each row: max |dv| over every joint before the first joint lets go, its release step (PhysX's
-    beside), max |dv| after. PhysX's drive effort is recovered from its joint states.
-    """
-    import numpy as np
+    scenario: str
+    engine: str
+    joint: str
+    """The joint that meets its speed line and lets go."""
+    before: float
+    """Largest |velocity - PhysX's| over every joint before PhysX's release step [rad/s or m/s]."""
+    release: int
+    """The engine's release step (-1: it never let go)."""
+    physx_release: int
+    """PhysX's release step."""
+    after: float
+    """Largest |velocity - PhysX's| over every joint from the release step on [rad/s or m/s]."""
 
-    from drive_envelope._src.scenario.chain import load_stand
+
+def chain_measure(engines: Sequence[str], scenarios: Sequence[object] | None = None) -> list[ChainRow]:
+    """Run each robot-scale scenario on real PhysX and on each engine; one row per (scenario, engine)."""
     from drive_envelope._src.teststand.engines import simulate
 
-    lines = [
-        "| scenario | engine | max \\|dv\\| before release [rad/s] | release step (physx) | "
-        "max \\|dv\\| after [rad/s] |",
-        "|---|---|---|---|---|",
-    ]
-    for path in CHAINS:
-        scenario = load_stand(path)
-        physx = simulate(scenario, "physx")
-        limit = scenario.joints[0].drive.max_effort
-        released = _release(physx.effort[:, 0], limit)
+    rows = []
+    for scenario in chain_scenarios() if scenarios is None else scenarios:
+        physx: Any = simulate(scenario, "physx")  # type: ignore[call-overload]
+        index = released_joint(scenario, physx.velocity)
+        joint = scenario.joints[index]  # type: ignore[attr-defined]
+        limit = joint.drive.max_effort
+        released = release_step(physx.effort[:, index], limit)
         for engine in engines:
-            run = simulate(scenario, engine)
+            run: Any = simulate(scenario, engine)  # type: ignore[call-overload]
             dv = np.abs(run.velocity - physx.velocity).max(axis=1)
-            own = _release(run.effort[:, 0], limit)
-            lines.append(
-                f"| {scenario.name} | {engine} | {dv[:released].max():.2g} | {own} ({released}) | "
-                f"{dv[released:].max():.2g} |"
+            rows.append(
+                ChainRow(
+                    scenario=scenario.name,  # type: ignore[attr-defined]
+                    engine=engine,
+                    joint=joint.name,
+                    before=float(dv[:released].max()),
+                    release=release_step(run.effort[:, index], limit),
+                    physx_release=released,
+                    after=float(dv[released:].max()),
+                )
             )
-    return "\n".join(lines).replace("\\\\", "\\")
+    return rows
+
+
+def chain_render(rows: Sequence[ChainRow]) -> str:
+    """The robot-scale Markdown table (between the chain markers of docs/parity.md)."""
+    lines = [
+        CHAIN_BEGIN,
+        "| scenario | engine | joint at its speed line | max \\|dv\\| before release [rad/s] | "
+        "release step (physx) | max \\|dv\\| after [rad/s] |",
+        "|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        lines.append(
+            f"| {row.scenario} | {row.engine} | {row.joint} | {row.before:.2g} | "
+            f"{row.release} ({row.physx_release}) | {row.after:.2g} |"
+        )
+    lines.append(CHAIN_END)
+    return "\n".join(lines)
+
+
+def chain_documented(text: str) -> dict[tuple[str, str], tuple[float, int, int, float]]:
+    """(scenario, engine) -> (before, release, PhysX's release, after) of docs/parity.md's chain table."""
+    body = text.split(CHAIN_BEGIN, 1)[1].split(CHAIN_END, 1)[0]
+    table = {}
+    for line in body.strip().splitlines()[2:]:
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        own, physx = cells[4].replace(")", "").split(" (")
+        table[(cells[0], cells[1])] = (float(cells[3]), int(own), int(physx), float(cells[5]))
+    return table
+
+
+def chain_write(rows: Sequence[ChainRow]) -> None:
+    """Replace the robot-scale table of docs/parity.md with ``rows``."""
+    text = DOC.read_text(encoding="utf-8")
+    head, rest = text.split(CHAIN_BEGIN, 1)
+    DOC.write_text(head + chain_render(rows) + rest.split(CHAIN_END, 1)[1], encoding="utf-8")
+
+
+def chain_rows(engines: Sequence[str]) -> str:
+    """The robot-scale table: per multi-DOF scenario and engine, against real PhysX.
+
+    Each row: the joint that meets its speed line, max |dv| over every joint before PhysX lets
+    that joint go, the engine's release step (PhysX's beside), max |dv| after. PhysX's drive effort
+    is recovered from its joint states.
+    """
+    return chain_render(chain_measure(engines))
 
 
 def main() -> None:
@@ -257,11 +351,17 @@ def main() -> None:
     parser.add_argument("--write", action="store_true", help="write the table into docs/parity.md")
     parser.add_argument("--engines", default=",".join(ENGINES), help="comma-separated engines")
     parser.add_argument(
-        "--chains", action="store_true", help="print the robot-scale table (multi-DOF chains vs real PhysX)"
+        "--chains",
+        action="store_true",
+        help="the robot-scale table (multi-DOF chains vs real PhysX; with --write, into docs/parity.md)",
     )
     args = parser.parse_args()
     if args.chains:
-        print(chain_rows(["reference", *(["mujoco"] if available("mujoco") else [])]))
+        chain_table = chain_measure(["reference", *(["mujoco"] if available("mujoco") else [])])
+        print(chain_render(chain_table))
+        if args.write:
+            chain_write(chain_table)
+            print(f"wrote {DOC}")
         return
     engines = [name for name in args.engines.split(",") if name]
     missing = [name for name in engines if not available(name)]
