@@ -166,3 +166,84 @@ def test_free_velocity_recovers_a_constant_load() -> None:
     free.reset(torch.tensor([1]))
     predicted = free.predict(v, 1.0 / inertia, step)
     assert predicted[1, 0] == v[1, 0]  # environment 1 forgot its step
+
+
+# -- the fused end-of-step clip (torch.compile): the same formula as one kernel ----------------------
+
+
+def _envelope(case: dict[str, np.ndarray], dtype: object) -> object:
+    names = ("max_effort", "max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient")
+    return dt_mod.EnvelopeTensors.from_values(**{n: case[n] for n in names}, dtype=dtype)
+
+
+def _fused_or_skip(*args: object, **kwargs: object) -> object:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # a failed compile warns: here it must say why
+        try:
+            return dt_mod.clip_effort(*args, **kwargs, fused=True)
+        except RuntimeWarning as exc:  # torch.compile needs a working C++ toolchain; report, don't fail
+            pytest.skip(f"torch.compile unavailable here: {exc}")
+
+
+def test_fused_end_of_step_gives_the_eager_numbers_float32() -> None:
+    """float32, 20000 random cases: the compiled kernel equals the eager port to 2 ulp of the effort scale."""
+    case = _random_case(3)
+    params = _envelope(case, torch.float32)
+    inputs = [torch.as_tensor(case[k], dtype=torch.float32) for k in ("effort", "velocity", "response")]
+    eager = dt_mod.clip_effort(params, *inputs, 0.005).numpy()
+    fused = _fused_or_skip(params, *inputs, 0.005).numpy()
+    scale = np.maximum(np.abs(case["effort"]), 1.0).astype(np.float32)
+    assert np.max(np.abs(fused - eager) / scale) <= 2.0 * np.finfo(np.float32).eps
+    assert np.mean(fused == eager) > 0.999  # nearly every element to the bit
+    assert np.all((fused == 0) | (np.sign(fused) == np.sign(case["effort"])))
+    assert np.mean(np.abs(eager) < np.abs(case["effort"]) - 1e-3) > 0.3  # the batch saturates often
+
+
+def test_free_velocity_clip_is_predict_clip_record_in_one_call() -> None:
+    """FreeVelocity.clip (fused) gives what predict + clip_effort + record give, and keeps the history."""
+    rng = np.random.default_rng(5)
+    shape = (64, 12)  # 768 elements: below FUSE_MIN_ELEMENTS, so fused=None stays eager
+    params = dt_mod.EnvelopeTensors.from_values(
+        max_effort=25.0, max_actuator_velocity=3.0, speed_effort_gradient=0.05, dtype=torch.float32
+    )
+    response, step = torch.full(shape, 20.0), 0.005
+    manual, fused, by_size = (dt_mod.FreeVelocity(torch.zeros(shape)) for _ in range(3))
+    v = torch.zeros(shape)
+    for _ in range(3):
+        request = torch.as_tensor(rng.normal(0.0, 40.0, shape), dtype=torch.float32)
+        expected = dt_mod.clip_effort(params, request, manual.predict(v, response, step), response, step)
+        manual.record(expected)
+        got = fused.clip(params, request, v, response, step, fused=True)
+        sized = by_size.clip(params, request, v, response, step)
+        np.testing.assert_allclose(got.numpy(), expected.numpy(), rtol=2e-6, atol=1e-5)
+        np.testing.assert_array_equal(sized.numpy(), expected.numpy())  # the eager path: to the bit
+        v = v + step * response * expected + 0.01  # a load the history must pick up
+    assert dt_mod.FUSE_MIN_ELEMENTS == 4096 and math.prod(shape) < dt_mod.FUSE_MIN_ELEMENTS
+
+
+def test_failed_compile_warns_once_and_stays_eager(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where torch.compile fails, one RuntimeWarning names the error and the eager numbers come back."""
+    from drive_envelope._src.kernels import torch_clip
+
+    def broken() -> object:
+        def run(*_: object) -> object:
+            raise RuntimeError("no C++ compiler\nsecond line")
+
+        return run
+
+    monkeypatch.setattr(torch_clip, "_compiled", broken)
+    monkeypatch.setattr(torch_clip, "_COMPILE_FAILED", [])
+    params = dt_mod.EnvelopeTensors.from_values(max_effort=30.0, max_actuator_velocity=2.0)
+    with pytest.warns(RuntimeWarning, match=r"torch\.compile failed \(RuntimeError: no C\+\+ compiler\)"):
+        first = dt_mod.clip_effort(params, torch.tensor([40.0]), torch.tensor([0.0]), 20.0, 0.005, fused=True)
+    assert first.tolist() == pytest.approx([20.0])  # the line at 2 rad/s after 5 ms at r = 20: 2/(20*0.005)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = dt_mod.clip_effort(
+            params, torch.tensor([-10.0]), torch.tensor([2.5]), 20.0, 0.005, fused=True
+        )
+    assert again.tolist() == [-10.0]  # braking from above the line back inside: given whole, no new warning

@@ -23,7 +23,10 @@ An explicit actuator's clip is ``clip_effort(params, effort, velocity, response,
 clip="end_of_step")``: PhysX's implicit clamp at the end-of-step velocity (the default of the Isaac
 Lab and mjlab actuators), or ``clip="start_of_step"``, the limit at the velocity the step starts
 from (``CLIP_RULES``); ``FreeVelocity`` estimates the velocity a step would end with without the
-actuator's effort from the last step (loads, gravity, the other joints).
+actuator's effort from the last step (loads, gravity, the other joints), and ``FreeVelocity.clip``
+does the estimate, the clip and the record in one call. ``fused=True`` runs the end-of-step clip as
+one ``torch.compile`` kernel (the same formula; eager where compiling fails), ``fused=None`` does so
+from ``FUSE_MIN_ELEMENTS`` elements (the actuators' choice); the default is the eager port.
 
 The Isaac Lab actuator built on these ops is ``drive_envelope.isaaclab.PerformanceEnvelopeActuator``
 (a real ``isaaclab.actuators.IdealPDActuator``); its envelope tensors are ``EnvelopeTensors``.
@@ -31,7 +34,7 @@ The Isaac Lab actuator built on these ops is ``drive_envelope.isaaclab.Performan
 
 from __future__ import annotations
 
-from drive_envelope._src.kernels.torch_clip import CLIP_RULES, FreeVelocity, clip_effort
+from drive_envelope._src.kernels.torch_clip import CLIP_RULES, FUSE_MIN_ELEMENTS, FreeVelocity, clip_effort
 from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 from drive_envelope._src.kernels.torch_ops import (
     clamp_drive_impulse,
@@ -44,6 +47,7 @@ from drive_envelope._src.kernels.torch_ops import (
 __all__ = [
     "CLIP_RULES",
     "EnvelopeTensors",
+    "FUSE_MIN_ELEMENTS",
     "FreeVelocity",
     "clamp_drive_impulse",
     "clamp_effort",

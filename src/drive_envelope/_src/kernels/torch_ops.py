@@ -468,15 +468,9 @@ def clamp_effort_implicit(
     Raises:
         InputError: a bad ``dt``, ``params``, dtype or shape, or a negative ``response`` on the host.
     """
-    import torch
-
     params = check_params(params)
     step = check_time_step(dt)
-    if not isinstance(response, torch.Tensor):
-        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
-        if negative.any():
-            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
-            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
+    refuse_negative_response(response)
     tau, v, r, applied = state_tensors(
         params,
         requested_effort=requested_effort,
@@ -487,9 +481,42 @@ def clamp_effort_implicit(
     broadcast_states(
         "clamp_effort_implicit", params, requested_effort=tau, velocity=v, response=r, applied_effort=applied
     )
-    max_e, max_v, resist, grad = params.as_tuple()
-    impulse = clamp_drive_impulse(
-        v, applied * step, tau * step, r, max_v, max_e * step, grad / step, resist * step
+    return implicit_effort_tensors(tau, v, applied, r, *params.as_tuple(), step)
+
+
+def refuse_negative_response(response: Any) -> None:
+    """A negative ``response`` given on the host (number, list, NumPy): InputError; a tensor is not read."""
+    import torch
+
+    if not isinstance(response, torch.Tensor):
+        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
+        if negative.any():
+            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
+            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
+
+
+def implicit_effort_tensors(
+    tau: torch.Tensor,
+    v: torch.Tensor,
+    applied: torch.Tensor,
+    r: torch.Tensor,
+    max_e: torch.Tensor,
+    max_v: torch.Tensor,
+    resist: torch.Tensor,
+    grad: torch.Tensor,
+    step: float,
+) -> torch.Tensor:
+    """:func:`clamp_effort_implicit`'s arithmetic on checked tensors of one dtype (eager or compiled).
+
+    The one place that turns the impulse port into efforts; ``torch_clip`` compiles it for the
+    explicit actuators' end-of-step clip.
+    """
+    import torch
+
+    impulse = _clamp_drive_impulse_tensors(
+        *torch.broadcast_tensors(
+            v, applied * step, tau * step, r, max_v, max_e * step, grad / step, resist * step
+        )
     )
     # (x*dt)/dt can round one ulp above x or max_effort: the clamp grows neither
     magnitude = torch.minimum(torch.fmin((impulse / step).abs(), tau.abs()), max_e)  # a NaN request: 0

@@ -367,7 +367,8 @@ def build() -> tuple[type, type]:
             """The PD effort limited by the envelope with the cfg's ``clip`` rule.
 
             ``"end_of_step"``: PhysX's clamp at the end-of-step velocity, from the velocity the step
-            would end with without this effort (:class:`FreeVelocity`, from the last step);
+            would end with without this effort (:class:`FreeVelocity`, from the last step), fused by
+            ``torch.compile`` from ``FUSE_MIN_ELEMENTS`` (4096) elements;
             ``"start_of_step"``: ``clip(effort, -L(v), L(v))`` at this step's velocity.
             """
             velocity = self._joint_vel if joint_vel is None else joint_vel
@@ -383,10 +384,8 @@ def build() -> tuple[type, type]:
                 )
             if self.physics_dt is None:
                 self.physics_dt = _simulation_dt()
-            free = self._free_velocity.predict(velocity, self.response, self.physics_dt)
-            applied = clip_effort(self.envelope, effort, free, self.response, self.physics_dt)
-            self._free_velocity.record(applied)
-            return applied
+            # the estimate and the clamp in one torch.compile kernel at RL scale (eager below it)
+            return self._free_velocity.clip(self.envelope, effort, velocity, self.response, self.physics_dt)
 
     @configclass
     class PerformanceEnvelopeActuatorCfg(IdealPDActuatorCfg):  # type: ignore[misc,valid-type]
