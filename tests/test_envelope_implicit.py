@@ -282,11 +282,13 @@ def test_acceleration_drive_is_inertia_independent() -> None:
 
 
 def test_drive_rejects_bad_arguments() -> None:
-    """Refuse a non-positive dt and an unknown drive type."""
-    with pytest.raises(ValueError, match="dt must be > 0"):
-        implicit_drive_effort(
-            stiffness=1, damping=1, position_error=0, velocity=0, target_velocity=0, response=1, dt=0.0
-        )
+    """Refuse a non-positive or infinite dt (check_time_step's rule, as every backend) and an unknown
+    drive type."""
+    for dt in (0.0, math.inf):
+        with pytest.raises(ValueError, match=r"dt: expected a time step > 0 and finite \[s\]"):
+            implicit_drive_effort(
+                stiffness=1, damping=1, position_error=0, velocity=0, target_velocity=0, response=1, dt=dt
+            )
     with pytest.raises(ValueError, match="drive_type"):
         implicit_drive_effort(
             stiffness=1,

@@ -22,6 +22,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.envelope.clamp import check_time_step
+
 __all__ = ["DriveType", "implicit_drive_effort"]
 
 DriveType = Literal["force", "acceleration"]
@@ -48,15 +50,14 @@ def implicit_drive_effort(
         target_velocity: Drive target velocity [rad/s or m/s].
         response: Joint velocity change per unit joint impulse, ``1/inertia`` for one DOF
             [rad/s/(N*m*s) or m/s/(N*s)], ``>= 0``.
-        dt: Time step [s], ``> 0``.
+        dt: Time step [s], a number ``> 0`` and finite (an array is refused).
         drive_type: ``"force"`` or ``"acceleration"``.
 
     Returns:
         The effort ``J/dt`` [N*m or N], before any clamp; broadcast shape, float64. A force drive
         on a DOF with zero response gives 0 (PhysX's guard), an acceleration drive gives inf there.
     """
-    if not dt > 0.0:
-        raise ValueError(f"dt must be > 0, got {dt!r}")
+    dt = check_time_step(dt)  # the one time-step rule (docs/architecture.md)
     if drive_type not in ("force", "acceleration"):
         raise ValueError(f"drive_type must be 'force' or 'acceleration', got {drive_type!r}")
     k, c, err, v, v_target, r = (
