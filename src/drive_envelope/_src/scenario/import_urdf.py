@@ -178,7 +178,10 @@ def urdf_joints(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
             stack.append(link_name)
     for entry, body in zip(entries, bodies, strict=True):
         if not body.mass > 0.0:
-            raise InputError(f"{file}: joint {entry['name']!r}: its link (and links fixed to it) has no mass")
+            raise InputError(
+                f"{file}: joint {entry['name']!r}: its link (with the links fixed to it) has no mass; "
+                "expected an <inertial> with <mass value> > 0"
+            )
         t = body.tensor
         entry.update(mass=body.mass, com=list(body.com),
                      inertia=[t[0][0], t[1][1], t[2][2], t[0][1], t[0][2], t[1][2]])  # fmt: skip
