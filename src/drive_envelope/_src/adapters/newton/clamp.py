@@ -22,11 +22,11 @@ PhysX's PGS/TGS iteration (``drive_envelope.mujoco.set_solver``, issue 21) does 
 a clamping stage is one function of the velocity Newton's solve predicts for the whole step. It
 sees neither the DOF's response ``(M^-1)_ii``, nor the other drives' impulses one by one (Newton
 solves the actuators of a step together, not in a root-to-leaf sweep), nor a TGS substep's loads
-and displacement, nor a velocity pass that re-clamps the step's total. So Newton keeps the
-whole-step implicit solve, which is PhysX's PGS on an isolated DOF; the nearest Newton gets to TGS
-is to step the solver ``position_iterations`` times with ``dt/position_iterations`` (per-substep
-loads, clamps and positions; no whole-step velocity re-clamp, so it is TGS with 0 velocity
-iterations), which is the caller's choice of time step, not something a clamping stage can do.
+and displacement, nor a velocity pass that re-clamps the step's total. So this stage keeps the
+whole-step implicit solve, which is PhysX's PGS on an isolated DOF. The one-joint test stand runs
+PhysX's PGS/TGS iteration without this API: its drive kernel
+(:mod:`~drive_envelope._src.adapters.newton.physx_drive`) computes the effort before Newton's step
+and hands it over as ``joint_f``.
 
 Where it differs from Newton's ``ClampingDCMotor`` (``sat``, ``v_lim``, ``max_e``): with
 ``max_actuator_velocity = v_lim``, ``speed_effort_gradient = v_lim / sat``, ``R = 0`` the two agree
