@@ -1,23 +1,30 @@
 """Cost of PerformanceEnvelopeActuator.compute against Isaac Lab's IdealPDActuator and DCMotor.
 
 ``envelope`` is the default clip (``"end_of_step"``: PhysX's clamp at the end-of-step velocity, the
-torch port of ``clamp_drive_impulse`` plus the free-velocity estimate), ``env_start`` the
-``"start_of_step"`` clip (the envelope's limit at the velocity the step starts from).
+torch port of ``clamp_drive_impulse`` plus the free-velocity estimate), which from 4096 elements runs
+as one ``torch.compile`` kernel (``FUSE_MIN_ELEMENTS``; the compile happens in the warm-up, not in
+the timing); ``env_eager`` the same clip forced eager (``fused=False``, what it cost before);
+``env_start`` the ``"start_of_step"`` clip (the envelope's limit at the velocity the step starts from).
 
 The three actuators are built as Isaac Lab's ``Articulation._process_actuators_cfg`` builds them
 (``(num_envs, num_joints)`` tensors, torch on the CPU unless ``--device cuda``) with the same gains,
 and each ``compute`` gets the same ``ArticulationActions`` and joint state. Rounds alternate the
 order (ABC, CBA, ...) so machine load hits all alike; the median time per call over the rounds is
-reported with the ratios against the two baselines measured in the same run. Isaac Lab comes from
+reported with the ratios against the two baselines measured in the same run. On the CPU the time is
+the calling thread's CPU time (``time.thread_time``) with torch on one thread (``--threads``), so
+other agents' load on the machine does not enter it; on CUDA it is wall time around synchronized
+blocks. Isaac Lab comes from
 its PyPI wheel's source tree, with the two Isaac Sim modules ``isaaclab.utils.assets`` imports
 stood in for, as ``tests/conftest.py`` does.
 
     .venv/bin/python benchmarks/bench_isaaclab.py [--envs 4096] [--joints 12] [--rounds 41] [--device cpu]
+        [--threads 1]
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import statistics
 import sys
 import time
@@ -58,9 +65,14 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=41)
     parser.add_argument("--calls", type=int, default=20, help="compute calls per timed block")
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (thread CPU time needs 1)")
     args = parser.parse_args()
     _isaaclab()
     import torch
+
+    torch.set_num_threads(args.threads)
+    cpu = args.device == "cpu"
+    clock = time.thread_time if cpu and args.threads == 1 else time.perf_counter
     from isaaclab.actuators import DCMotorCfg, IdealPDActuatorCfg
     from isaaclab.utils.types import ArticulationActions
 
@@ -80,6 +92,12 @@ def main() -> None:
             args.joints,
             args.device,
         ),
+        "env_eager": _build(  # the same clip, eager PyTorch (fused=False below)
+            PerformanceEnvelopeActuatorCfg(**gains, **line, effective_inertia=0.05, physics_dt=0.005),
+            args.envs,
+            args.joints,
+            args.device,
+        ),
         "env_start": _build(  # clip="start_of_step": the limit at the step's start velocity
             PerformanceEnvelopeActuatorCfg(**gains, **line, clip="start_of_step"),
             args.envs,
@@ -94,6 +112,8 @@ def main() -> None:
             args.device,
         ),
     }
+    history = actuators["env_eager"]._free_velocity
+    history.clip = functools.partial(type(history).clip, history, fused=False)
     gen = torch.Generator(device="cpu").manual_seed(0)
     shape = (args.envs, args.joints)
     q, v, target = (torch.randn(shape, generator=gen).to(args.device) * s for s in (0.5, 6.0, 0.5))
@@ -114,19 +134,23 @@ def main() -> None:
     for round_index in range(args.rounds):
         order = names if round_index % 2 == 0 else names[::-1]
         for name in order:
-            if args.device != "cpu":
+            if not cpu:
                 torch.cuda.synchronize()
-            start = time.perf_counter()
+            start = clock()
             for _ in range(args.calls):
                 call(actuators[name])
-            if args.device != "cpu":
+            if not cpu:
                 torch.cuda.synchronize()
-            times[name].append((time.perf_counter() - start) / args.calls)
+            times[name].append((clock() - start) / args.calls)
     median = {name: statistics.median(values) for name, values in times.items()}
-    print(f"compute() on ({args.envs}, {args.joints}) {args.device} tensors, median of {args.rounds} rounds:")
+    what = "thread CPU time" if clock is time.thread_time else "wall time"
+    print(
+        f"compute() on ({args.envs}, {args.joints}) {args.device} tensors, {args.threads} torch thread(s), "
+        f"{what}, median of {args.rounds} rounds:"
+    )
     for name in names:
         print(f"  {name:<9} {median[name] * 1e6:9.1f} us")
-    for name in ("envelope", "env_start"):
+    for name in ("envelope", "env_eager", "env_start"):
         print(
             f"  {name} / ideal_pd = {median[name] / median['ideal_pd']:.2f}x, "
             f"{name} / dc_motor = {median[name] / median['dc_motor']:.2f}x"
