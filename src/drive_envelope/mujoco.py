@@ -19,6 +19,7 @@ MuJoCo's units are unspecified; drive_envelope assumes the model is SI (rad, m, 
 from __future__ import annotations
 
 from drive_envelope._src.adapters.mujoco.build import BUILD_COMMAND, PluginError, build_plugin
+from drive_envelope._src.adapters.mujoco.chain_import import mjcf_joints
 from drive_envelope._src.adapters.mujoco.inertia import effective_inertia
 from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME, load_plugin, plugin_library_path
 from drive_envelope._src.adapters.mujoco.mjcf import write_mjcf
@@ -70,6 +71,7 @@ __all__ = [
     "get_gains",
     "get_solver",
     "load_plugin",
+    "mjcf_joints",
     "model_drives",
     "plugin_config",
     "plugin_library_path",

@@ -10,7 +10,8 @@ refused before it starts. The ``reference`` engine is a float64 NumPy model of t
 A multi-DOF stand: a file with a ``[[joints]]`` list is a :class:`ChainScenario` (a fixed-base
 chain or tree of driven links under gravity; ``load_stand`` reads either kind), run by the
 ``reference`` engine (PhysX's articulation solver: Gauss-Seidel drive rows root to leaf) and
-``physx``, giving a :class:`ChainTrajectory`.
+``physx``, giving a :class:`ChainTrajectory`. ``urdf_joints(path)`` reads a URDF robot's joints
+as ``[[joints]]`` entries (``drive_envelope.mujoco.mjcf_joints`` an MJCF's).
 
 A bench's loads: :class:`PendulumSpec` (a point mass pulled by gravity), :class:`FrictionSpec`
 (PhysX 5.6 joint friction: static, dynamic, viscous) and ``JointSpec.armature``; a
@@ -27,6 +28,7 @@ from drive_envelope._src.scenario.chain import (
     load_stand,
 )
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory, save_chain_trajectory
+from drive_envelope._src.scenario.import_urdf import urdf_joints
 from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec, PendulumSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import (
@@ -75,4 +77,5 @@ __all__ = [
     "simulate",
     "trajectory_to_csv",
     "trajectory_to_json",
+    "urdf_joints",
 ]
