@@ -48,11 +48,11 @@ SKIP_REASONS = {
     "isaacsim": "needs Isaac Sim",
     "broken": "known to fail as written (issue 24: an input not shipped yet, or undefined names)",
 }
-KNOWN_BROKEN_BLOCKS = 1
+KNOWN_BROKEN_BLOCKS = 0
 """Blocks marked ``skip broken`` (35 failing commands in 21 blocks when the docs test landed).
 
-Issue 24 stays open until this is 0: fix a block, remove its marker and lower the number; the
-ratchet test below fails when a marker is added (a new broken block) or the number is not lowered.
+0 since every block was fixed (issue 24): the ratchet test below fails when a marker is added; a
+new block that does not run is fixed, not marked.
 """
 SHELL_LANGS = {"sh", "bash", "shell", "console"}
 COMMAND_TIMEOUT_S = 240.0
