@@ -296,3 +296,18 @@ def test_runs_that_agree_with_physx_draw_no_warning(file: Path) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", EngineWarning)
         simulate(load_scenario(file), "newton")
+
+
+def test_cli_on_a_tgs_scenario_says_nothing_and_ends_at_real_physx(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``simulate --engine newton`` on the TGS actuator_swing: no warning, real PhysX's 0.12655 rad/s."""
+    from drive_envelope._src.cli.main import main
+
+    out = tmp_path / "swing.csv"
+    assert (
+        main(["simulate", str(SCENARIOS / "actuator_swing.toml"), "--engine", "newton", "-o", str(out)]) == 0
+    )
+    assert "TGS" not in capsys.readouterr().err
+    header, *_, last = out.read_text().splitlines()
+    assert float(last.split(",")[header.split(",").index("velocity")]) == pytest.approx(0.12655, abs=1e-4)
