@@ -153,27 +153,59 @@ def test_urdf_errors_name_the_file_and_element(tmp_path: Path) -> None:
 
 
 @needs_go2
-def test_go2_legs_import_is_a_tree_with_mujocos_dynamics() -> None:
-    mujoco = pytest.importorskip("mujoco")
+def test_go2_legs_import_is_a_tree_on_the_base() -> None:
     scenario = robots.scenario("go2_legs", "pgs")
     assert isinstance(scenario, ChainScenario) and scenario.dofs == 12 and not scenario.is_chain
     assert [scenario.joints[i].parent for i in (0, 3, 6, 9)] == [-1] * 4  # four legs on the base
     hip = scenario.joints[0]
     assert hip.origin == (0.1934, 0.0465, 0.0) and hip.armature == 0.01  # <body name="FL_hip" pos=...>
-    # the reference's M(q) and h(q, v) are MuJoCo's own on the compiled file (its base free, at rest)
-    model = mujoco.MjModel.from_xml_path(str(robots.GO2_MJCF))
+    assert hip.axis_vector == (1.0, 0.0, 0.0)
+
+
+MENAGERIE = robots.DATA / "menagerie"
+MODELS = [
+    "go2.xml",
+    "anybotics_anymal_c/anymal_c.xml",
+    "unitree_g1/g1.xml",
+    "panda.xml",
+    "kinova_gen3/gen3.xml",
+]
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_mjcf_import_has_mujocos_own_dynamics(name: str) -> None:
+    """The reference's M(q) and h(q, v) of an imported Menagerie robot are MuJoCo's (base free, at rest).
+
+    ANYmal C, G1 and Gen3 have turned body frames; the Panda's hand is welded onto link7 (merged).
+    """
+    mujoco = pytest.importorskip("mujoco")
+    from drive_envelope._src.adapters.mujoco.chain_import import mjcf_joints
+
+    path = MENAGERIE / name
+    if not path.is_file():
+        pytest.skip(f"needs {path}")
+    scenario = chain_from_mapping({"simulation": {"dt": 0.01, "duration": 0.1}, "joints": mjcf_joints(path)})
+    model = mujoco.MjModel.from_xml_path(str(path))
     model.opt.gravity[:] = (0.0, 0.0, -scenario.simulation.gravity)  # the stand's 9.80665, not 9.81
     data = mujoco.MjData(model)
+    free = 6 if model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0
+    assert model.nv - free == scenario.dofs
     rng = np.random.default_rng(3)
-    q, v = rng.uniform(-1.0, 1.0, 12), rng.uniform(-3.0, 3.0, 12)
-    data.qpos[7:], data.qvel[6:] = q, v
+    q, v = rng.uniform(-1.0, 1.0, scenario.dofs), rng.uniform(-3.0, 3.0, scenario.dofs)
+    data.qpos[model.nq - scenario.dofs :], data.qvel[free:] = q, v
     mujoco.mj_forward(model, data)
     full = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, full)
     chain = ChainModel(scenario)
     kin = chain.kinematics(q)
-    np.testing.assert_allclose(chain.mass_matrix(kin), full[6:, 6:], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(chain.bias(kin, v), data.qfrc_bias[6:], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(chain.mass_matrix(kin), full[free:, free:], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(chain.bias(kin, v), data.qfrc_bias[free:], rtol=0, atol=1e-10)
+    if name == "panda.xml":  # link7 carries the welded link8 and hand, not the fingers
+        link7 = next(joint for joint in scenario.joints if joint.name == "joint7")
+        subtree = model.body_subtreemass
+        fingers = subtree[model.body("left_finger").id] + subtree[model.body("right_finger").id]
+        assert math.isclose(link7.mass, subtree[model.body("link7").id] - fingers, rel_tol=1e-12)
+        assert link7.mass > model.body_mass[model.body("link7").id] + 0.5
 
 
 def test_mjcf_import_of_turned_bodies_and_offset_joints_matches_mujoco(tmp_path: Path) -> None:
@@ -223,8 +255,8 @@ def test_mjcf_import_refuses_what_the_chain_cannot_hold(tmp_path: Path) -> None:
     cases = {
         "ball": '<mujoco><worldbody><body name="a"><joint type="ball"/><geom size="0.1"/></body>'
         "</worldbody></mujoco>",
-        "welded": '<mujoco><worldbody><body name="a"><joint/><geom size="0.1"/><body name="b">'
-        '<geom size="0.1"/></body></body></worldbody></mujoco>',
+        "2 joint(s)": '<mujoco><worldbody><body name="a"><joint/><joint/><geom size="0.1"/></body>'
+        "</worldbody></mujoco>",
         "cannot compile": "<mujoco><worldbody><body></mujoco>",
     }
     for word, text in cases.items():
