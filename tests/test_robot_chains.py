@@ -2,8 +2,9 @@
 
 Golden values come from the assets' own text (``fr3.urdf``'s elements, ``go2.xml`` as MuJoCo
 compiles it), from the USD conversion of the same FR3 (``fr3_usd``, read with pxr), from MuJoCo's
-own dynamics of the Go2 (``mj_fullM`` and ``qfrc_bias`` of the compiled file: the reference
-engine's M(q) and h(q, v) of the imported legs must be MuJoCo's), from hand sums (a link welded
+own dynamics of the same files (``mj_fullM`` and ``qfrc_bias`` of MuJoCo's URDF parser on the FR3
+and of five Menagerie robots: the reference engine's M(q) and h(q, v) of the imported robots must
+be MuJoCo's), from hand sums (a link welded
 onto another by the parallel-axis theorem) and from real PhysX (the robot-scale rows). The
 assets are in ``../shared/data``; every test here skips without them.
 """
@@ -91,6 +92,31 @@ def test_fr3_urdf_and_its_usd_conversion_hold_the_same_numbers() -> None:
         )
         ixx, iyy, izz, ixy, ixz, iyz = entry["inertia"]
         np.testing.assert_allclose(tensor, [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], atol=2e-8)
+
+
+@needs_fr3
+def test_fr3_urdf_import_has_mujocos_dynamics_of_the_same_urdf() -> None:
+    """MuJoCo's own URDF parser on ``fr3_boxes.urdf`` (fr3.urdf's inertials, boxes for meshes)."""
+    mujoco = pytest.importorskip("mujoco")
+    boxes = robots.FR3_URDF.with_name("fr3_boxes.urdf")
+    if not boxes.is_file():
+        pytest.skip(f"needs {boxes}")
+    scenario = chain_from_mapping(
+        {"simulation": {"dt": 0.01, "duration": 0.1}, "joints": urdf_joints(robots.FR3_URDF)}
+    )
+    model = mujoco.MjModel.from_xml_path(str(boxes))
+    model.opt.gravity[:] = (0.0, 0.0, -scenario.simulation.gravity)
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(5)
+    q, v = rng.uniform(-1.5, 1.5, 7), rng.uniform(-3.0, 3.0, 7)
+    data.qpos[:], data.qvel[:] = q, v
+    mujoco.mj_forward(model, data)
+    full = np.zeros((7, 7))
+    mujoco.mj_fullM(model, data, full)
+    chain = ChainModel(scenario)
+    kin = chain.kinematics(q)
+    np.testing.assert_allclose(chain.mass_matrix(kin), full, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(chain.bias(kin, v), data.qfrc_bias, rtol=0, atol=1e-10)
 
 
 def test_urdf_fixed_link_is_welded_by_the_parallel_axis_theorem(tmp_path: Path) -> None:
