@@ -4,8 +4,9 @@ These tests need mjlab, which pins MuJoCo 3.11: they run in their own virtual en
 (``scripts/test_mjlab.sh``, part of ``make test``) and skip elsewhere. Two environments, the Go1
 from mjlab's asset zoo with one actuator group for the hips and thighs and one for the knees
 (the Go1's own limits: 23.7 N*m / 30.1 rad/s, 35.55 N*m / 20.06 rad/s), squatting fast enough to
-saturate. The explicit actuator is checked against the float64 NumPy reference (an independent
-implementation); the implicit one against the envelope and the PD law at the end-of-step velocity.
+saturate. The explicit actuator, with either clip rule, is checked against the float64 NumPy
+reference (an independent implementation; for the end-of-step clip with every input rebuilt from
+MuJoCo's outputs); the implicit one against the envelope and the PD law at the end-of-step velocity.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ HIP = {"max_effort": 23.7, "max_actuator_velocity": 30.1, "speed_effort_gradient
 KNEE = {"max_effort": 35.55, "max_actuator_velocity": 20.06, "velocity_dependent_resistance": 0.1}
 
 
-def _scene(implicit: bool) -> tuple[Any, Any, Any]:
+def _scene(implicit: bool, clip: str = "end_of_step") -> tuple[Any, Any, Any]:
     """(scene, simulation, robot) of the Go1 with envelope actuators, contacts and limits off if implicit."""
     import warp as wp
     from mjlab.asset_zoo.robots.unitree_go1 import go1_constants as go1
@@ -38,7 +39,7 @@ def _scene(implicit: bool) -> tuple[Any, Any, Any]:
     from drive_envelope.mjlab import PerformanceEnvelopeActuatorCfg
 
     wp.config.quiet = True
-    common = {"stiffness": 40.0, "damping": 1.0, "implicit": implicit}
+    common = {"stiffness": 40.0, "damping": 1.0, "implicit": implicit, "clip": clip}
     hip = PerformanceEnvelopeActuatorCfg(
         target_names_expr=(".*_hip_joint", ".*_thigh_joint"),
         armature=go1.HIP_ACTUATOR.reflected_inertia,
@@ -70,7 +71,7 @@ def _squat(robot: Any, step: int, dt: float) -> Any:
 
 @pytest.fixture(scope="module")
 def explicit() -> tuple[Any, Any, Any]:
-    return _scene(implicit=False)
+    return _scene(implicit=False, clip="start_of_step")
 
 
 @pytest.fixture(scope="module")
@@ -83,10 +84,11 @@ def test_mjlab_fuses_the_envelope_actuators(explicit: Any) -> None:
     _, _, robot = explicit
     assert robot._custom_actuators == ()  # every actuator of ours went into a fused group
     assert len(robot.actuators) == 2
+    assert all(type(a).__name__ == "StartOfStepEnvelopeActuator" for a in robot.actuators)
 
 
-def test_explicit_efforts_are_the_envelope_clip_at_the_current_velocity(explicit: Any) -> None:
-    """Equal the float64 reference, clamp_effort(envelope, PD, v), within float32 noise, saturating often."""
+def test_start_of_step_efforts_are_the_envelope_clip_at_the_current_velocity(explicit: Any) -> None:
+    """clip='start_of_step': the float64 reference clamp_effort(envelope, PD, v), within float32 noise."""
     scene, sim, robot = explicit
     dt = sim.cfg.mujoco.timestep
     worst, saturated, total = 0.0, 0, 0
@@ -106,6 +108,63 @@ def test_explicit_efforts_are_the_envelope_clip_at_the_current_velocity(explicit
             saturated += int((np.abs(reference) < np.abs(pd) - 1e-9).sum())
             total += reference.size
     assert worst < 1e-4
+    assert saturated > 0.05 * total
+
+
+@pytest.fixture(scope="module")
+def end_of_step() -> tuple[Any, Any, Any]:
+    return _scene(implicit=False, clip="end_of_step")
+
+
+def test_end_of_step_efforts_are_physx_clamp_at_the_estimated_free_velocity(end_of_step: Any) -> None:
+    """Equal NumPy's clamp_effort_implicit at v + (v - v_prev - r*dt*e_prev), r from MuJoCo's mj_solveM.
+
+    The reference rebuilds every input in float64 from what MuJoCo reports: the velocities and
+    applied efforts of the two last steps, and the response (M^-1)_ii at the configuration the last
+    step started from (drive_envelope.mujoco.effective_inertia on a MuJoCo MjData), which the
+    actuator read from MJWarp's own mass matrix. Both groups stay fused.
+    """
+    import mujoco
+
+    from drive_envelope import clamp_effort_implicit
+    from drive_envelope.mujoco import effective_inertia
+
+    scene, sim, robot = end_of_step
+    assert robot._custom_actuators == () and len(robot.actuators) == 2
+    assert all(a.response_source == "mass_matrix" for a in robot.actuators)
+    model, dt = sim.mj_model, sim.cfg.mujoco.timestep
+    scratch = mujoco.MjData(model)
+    past: list[Any] = []  # (qpos, v, tau) at each control time, tau the effort applied in that step
+    worst, saturated, total = 0.0, 0, 0
+    for step in range(120):
+        target = _squat(robot, step, dt)
+        robot.set_joint_position_target(target)
+        qpos = sim.data.qpos[:].double().numpy().copy()
+        q0, v0 = robot.data.joint_pos.double().numpy().copy(), robot.data.joint_vel.double().numpy().copy()
+        scene.write_data_to_sim()
+        sim.step()
+        scene.update(dt)
+        tau = sim.data.actuator_force.double().numpy().copy()
+        if len(past) >= 2:
+            qpos_prev, v_prev, tau_prev = past[-1]
+            for actuator in robot.actuators:
+                ids, ctrl = actuator.target_ids.tolist(), actuator.global_ctrl_ids.tolist()
+                dofs = robot.indexing.joint_v_adr[actuator.target_ids].tolist()
+                for w in range(NUM_ENVS):
+                    scratch.qpos[:] = qpos_prev[w]
+                    joints = [int(model.dof_jntid[d]) for d in dofs]
+                    r = 1.0 / np.array(list(effective_inertia(model, scratch, joints).values()))
+                    v = v0[w, ids]
+                    free = v + (v - v_prev[w, ids] - r * dt * tau_prev[w, ctrl])
+                    pd = 40.0 * (target[w, ids].double().numpy() - q0[w, ids]) - 1.0 * v
+                    reference = clamp_effort_implicit(actuator.envelope, pd, free, r, dt)
+                    worst = max(
+                        worst, float(np.abs(tau[w, ctrl] - reference).max()) / actuator.envelope.max_effort
+                    )
+                    saturated += int((np.abs(reference) < np.abs(pd) - 1e-6).sum())
+                    total += len(ids)
+        past.append((qpos, v0, tau))
+    assert worst < 1e-3  # float32 buffers against float64 (a clamp near the line amplifies rounding)
     assert saturated > 0.05 * total
 
 

@@ -133,15 +133,18 @@ def _end_of_step_tensors(
     max_v: torch.Tensor,
     resist: torch.Tensor,
     grad: torch.Tensor,
-    step: float,
+    step: Any,
 ) -> torch.Tensor:
     """The free-velocity estimate and the implicit clamp at it, on tensors of one shape (compiled whole).
 
-    ``v_free = v + (v - v_prev - r*dt*e_prev)`` where ``known`` (a step was recorded), else ``v``.
+    ``v_free = v + (v - v_prev - r*dt*e_prev)`` where ``known`` (bool, or 0/1: a step was recorded) is
+    nonzero, else ``v``. ``step`` is a float or a tensor that broadcasts [s].
     """
     import torch
 
-    free = torch.where(known, v + (v - v_prev - r * step * e_prev), v)  # v itself (its zero's sign) if not
+    free = torch.where(
+        known != 0, v + (v - v_prev - r * step * e_prev), v
+    )  # v itself (its zero's sign) if not
     return implicit_effort_tensors(tau, free, torch.zeros_like(tau), r, max_e, max_v, resist, grad, step)
 
 
@@ -155,7 +158,7 @@ def _compiled() -> Callable[..., torch.Tensor]:
 _COMPILE_FAILED: list[str] = []  # the first failure's message: from then on every call is eager
 
 
-def _run_fused(tensors: list[torch.Tensor], step: float) -> torch.Tensor | None:
+def _run_fused(tensors: list[torch.Tensor], step: Any) -> torch.Tensor | None:
     """The compiled kernel's result, or None where torch.compile does not work here (warned once)."""
     if _COMPILE_FAILED:
         return None
@@ -170,6 +173,46 @@ def _run_fused(tensors: list[torch.Tensor], step: float) -> torch.Tensor | None:
             stacklevel=3,
         )
         return None
+
+
+def end_of_step_law(
+    params: EnvelopeTensors,
+    effort: torch.Tensor,
+    velocity: torch.Tensor,
+    response: torch.Tensor,
+    step: Any,
+    history: tuple[torch.Tensor, torch.Tensor, torch.Tensor],
+    *,
+    fused: bool | None = None,
+) -> torch.Tensor:
+    """:func:`end_of_step_effort` without its checks, for an actuator's control law on its own buffers.
+
+    Every tensor has the parameters' shape, dtype and device, checked once when the actuator was
+    built (no host work per call, so it runs inside a fused mjlab group and a CUDA graph).
+
+    Args:
+        params: The envelope parameters.
+        effort: The requested effort [N*m or N].
+        velocity: Current velocity [rad/s or m/s].
+        response: Unit response [1/(kg*m^2) or 1/kg].
+        step: The physics time step [s], a float or a tensor.
+        history: ``(v_prev [rad/s or m/s], effort_prev [N*m or N], known)`` as in
+            :func:`end_of_step_effort`; ``known`` may be 0/1 floats.
+        fused: As in :func:`end_of_step_effort` (None: by size).
+
+    Returns:
+        The effort to apply [N*m or N].
+    """
+    v_prev, e_prev, known = history
+    max_e, max_v, resist, grad = params.as_tuple()
+    if fused if fused is not None else effort.numel() >= FUSE_MIN_ELEMENTS:
+        tensors = [effort, velocity, v_prev, e_prev, known, response, max_e, max_v, resist, grad]
+        out = _run_fused([t.contiguous() for t in tensors], step)
+        if out is not None:
+            return out
+    return _end_of_step_tensors(
+        effort, velocity, v_prev, e_prev, known, response, max_e, max_v, resist, grad, step
+    )
 
 
 def end_of_step_effort(
