@@ -49,7 +49,7 @@ def _stand_spec() -> Any:
     return spec
 
 
-def _stand_scene(clip: str, envs: int) -> tuple[Any, Any, Any]:
+def _stand_scene(clip: str, envs: int, inertia: Any = None) -> tuple[Any, Any, Any]:
     import warp as wp
     from mjlab.entity import EntityArticulationInfoCfg, EntityCfg
     from mjlab.scene import Scene, SceneCfg
@@ -61,7 +61,12 @@ def _stand_scene(clip: str, envs: int) -> tuple[Any, Any, Any]:
     # the first stand's envelope and gains; every world gets its own below
     source, kp, kd = STANDS[0]
     drive = PerformanceEnvelopeActuatorCfg(
-        target_names_expr=("joint",), stiffness=kp, damping=kd, envelope=source, clip=clip
+        target_names_expr=("joint",),
+        stiffness=kp,
+        damping=kd,
+        envelope=source,
+        clip=clip,
+        effective_inertia=inertia,
     )
     robot = EntityCfg(spec_fn=_stand_spec, articulation=EntityArticulationInfoCfg(actuators=(drive,)))
     scene = Scene(SceneCfg(num_envs=envs, entities={"robot": robot}), device="cpu")
@@ -132,6 +137,24 @@ def test_response_comes_from_the_model_mass_matrix(end_of_step: Any) -> None:
     _, _, actuator = end_of_step
     assert actuator.response_source == "mass_matrix"
     assert actuator.response.flatten().tolist() == pytest.approx([1.0 / INERTIA] * len(CASES), rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("inertia", "source", "response"),
+    [("model", "model", 1.0 / INERTIA), ({"j.*": "0.1 kg*m^2"}, "effective_inertia", 10.0)],
+)
+def test_response_from_the_keyframe_or_the_config(inertia: Any, source: str, response: float) -> None:
+    """effective_inertia='model' keeps the keyframe's (M^-1)_ii; a regex dict with units is read as given."""
+    _, _, robot = _stand_scene("end_of_step", 1, inertia)
+    actuator = robot.actuators[0]
+    assert actuator.response_source == source
+    assert actuator.response.flatten().tolist() == pytest.approx([response], rel=1e-6)
+
+
+def test_effective_inertia_dict_must_name_every_target() -> None:
+    """A dict that misses a target is refused at initialize, naming the target."""
+    with pytest.raises(InputError, match=r"effective_inertia: target '.*joint' is not named"):
+        _stand_scene("end_of_step", 1, {"elbow": 0.1})
 
 
 @pytest.mark.parametrize("case", range(len(CASES)), ids=[f"{s[0]}-load{share}" for s, share in CASES])

@@ -87,7 +87,8 @@ class PerformanceEnvelopeActuatorCfg(IdealPdActuatorCfg):
     effective_inertia: float | str | dict[str, float | str] | None = None
     """Each target's effective inertia [kg*m^2 or kg], ``1/(M^-1)_ii``, or a ``{target regex: value}``
     dict naming every target; the end-of-step clip's unit response is its inverse. None: from the
-    model (its first keyframe, then MJWarp's mass matrix after every step; joints only)."""
+    model, at its first keyframe, then MJWarp's mass matrix after every step (joints only; costs a
+    batched Cholesky per robot and step). ``"model"``: the first keyframe's, kept (no per-step cost)."""
     physics_dt: float | None = None
     """The physics time step [s]. None: the model's ``opt.timestep``."""
 
@@ -107,7 +108,10 @@ class PerformanceEnvelopeActuatorCfg(IdealPdActuatorCfg):
                     f"{_CFG}.clip: 'end_of_step' needs a joint or tendon transmission (a site has no "
                     "velocity); set clip='start_of_step'"
                 )
-            if self.transmission_type == TransmissionType.TENDON and self.effective_inertia is None:
+            if self.transmission_type == TransmissionType.TENDON and self.effective_inertia in (
+                None,
+                "model",
+            ):
                 raise InputError(
                     f"{_CFG}.effective_inertia: needed for a tendon transmission with clip='end_of_step' "
                     "(the model's response is per joint) [kg]; set it, or clip='start_of_step'"
@@ -119,7 +123,7 @@ class PerformanceEnvelopeActuatorCfg(IdealPdActuatorCfg):
         from drive_envelope._src.values import read_joint_quantity
 
         value, where = self.effective_inertia, f"{_CFG}.effective_inertia"
-        if value is None:
+        if value is None or value == "model":
             return None
         if isinstance(value, dict):
             items = {
@@ -219,9 +223,12 @@ class PerformanceEnvelopeActuator(IdealPdActuator[PerformanceEnvelopeActuatorCfg
         for name in (*ENVELOPE_FIELDS, *_HISTORY):
             setattr(self, name, None)
         self.response_source: str | None = None
-        """Where ``response`` comes from: ``"effective_inertia"`` or ``"mass_matrix"`` (end of step only)."""
+        """Where ``response`` comes from: ``"effective_inertia"``, ``"model"`` (the first keyframe's) or
+        ``"mass_matrix"`` (MJWarp's, every step); end of step only."""
         self._data: Any = None
         self._mass_matrix: Any = None
+        self._dofs: Any = None
+        self._steps = 0
 
     def initialize(self, mj_model: Any, model: Any, data: Any, device: str) -> None:
         super().initialize(mj_model, model, data, device)
@@ -251,7 +258,12 @@ class PerformanceEnvelopeActuator(IdealPdActuator[PerformanceEnvelopeActuatorCfg
         self.response[:] = torch.tensor(
             model_response(mj_model, dofs, f"{_CFG}.effective_inertia"), device=device
         )
-        self._mass_matrix = MassMatrixResponse(mj_model, dofs, device)
+        if self.cfg.effective_inertia == "model":
+            self.response_source = "model"  # the keyframe's response, fixed: no per-step cost
+            return
+        self._mass_matrix = MassMatrixResponse.shared(self.entity, mj_model, device)
+        self._dofs = torch.tensor(dofs, dtype=torch.long, device=device)
+        self._steps = 0
         self.response_source = "mass_matrix"
 
     def _per_target(self, inertia: float | dict[str, float]) -> list[float]:
@@ -293,7 +305,11 @@ class PerformanceEnvelopeActuator(IdealPdActuator[PerformanceEnvelopeActuatorCfg
         self.history.copy_(self._known_last)
         self._known_last.fill_(1.0)
         if self._mass_matrix is not None:
-            self._mass_matrix(self._data.M, self.response)
+            self._steps += 1
+            diagonal = self._mass_matrix.diagonal(self._data.M, self._steps)[:, self._dofs]
+            # a world whose M failed (NaN) keeps its last response: no NaN reaches the clip
+            good = torch.isfinite(diagonal) & (diagonal > 0.0)
+            self.response.copy_(torch.where(good, diagonal.to(self.response.dtype), self.response))
 
     def reset(self, env_ids: torch.Tensor | slice | None = None) -> None:
         """Reset as mjlab does; these environments forget their last steps (a reset moves them)."""

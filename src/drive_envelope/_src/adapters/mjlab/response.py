@@ -37,14 +37,18 @@ def model_response(mj_model: Any, dofs: list[int], where: str) -> list[float]:
 
 
 class MassMatrixResponse:
-    """``(M^-1)_ii`` of some DOFs from MJWarp's ``data.M`` of every world, on the data's device."""
+    """``(M^-1)_ii`` of every DOF from MJWarp's ``data.M`` of every world, shared by an entity's groups.
 
-    def __init__(self, mj_model: Any, dofs: list[int], device: str) -> None:
+    Each actuator group asks with its own count of physics steps; the first to ask for a step
+    computes the whole diagonal, the others of that step reuse it (mjlab calls every actuator's
+    ``update`` once per step), so the cost is per robot and step, not per group.
+    """
+
+    def __init__(self, mj_model: Any, device: str) -> None:
         """Index maps from the model's CSR layout (host, once).
 
         Args:
             mj_model: The compiled model MJWarp was built from.
-            dofs: The DOF addresses whose response is wanted, in order.
             device: Where MJWarp's data lives.
         """
         import torch
@@ -56,24 +60,37 @@ class MassMatrixResponse:
             raise InputError(f"mass-matrix response: M_rownnz sums to {rows.size}, M_colind has {cols.size}")
         self._rows = torch.as_tensor(rows, device=device)
         self._cols = torch.as_tensor(cols, device=device)
-        self._dofs = torch.as_tensor(dofs, dtype=torch.long, device=device)
         self._nv = int(mj_model.nv)
+        self._step = -1
+        self._diagonal: Any = None
 
-    def __call__(self, packed: torch.Tensor, out: torch.Tensor) -> None:
-        """Write ``(M^-1)_ii`` of the DOFs into ``out`` ``(nworld, len(dofs))`` [1/(kg*m^2) or 1/kg].
+    def diagonal(self, packed: torch.Tensor, step: int) -> torch.Tensor:
+        """``(M^-1)_ii`` of every DOF ``(nworld, nv)`` [1/(kg*m^2) or 1/kg]; NaN in a world whose M fails.
 
         Args:
             packed: MJWarp's ``data.M`` as a tensor, ``(nworld, nC)``.
-            out: The response buffer, written in place (a fused group's view sees it).
+            step: The asking group's physics-step count (a new count recomputes).
         """
         import torch
 
-        dense = packed.new_zeros((packed.shape[0], self._nv, self._nv))
-        dense[:, self._rows, self._cols] = packed
-        dense[:, self._cols, self._rows] = packed  # the upper triangle mirrors the lower
-        factor, info = torch.linalg.cholesky_ex(dense)
-        inverse = torch.cholesky_inverse(factor)
-        diagonal = torch.diagonal(inverse, dim1=-2, dim2=-1)[:, self._dofs]
-        # a world whose M is not positive definite (info > 0) keeps its last response: no NaN reaches the clip
-        good = (info == 0).unsqueeze(-1) & torch.isfinite(diagonal) & (diagonal > 0)
-        out.copy_(torch.where(good, diagonal.to(out.dtype), out))
+        if step != self._step:
+            dense = packed.new_zeros((packed.shape[0], self._nv, self._nv))
+            dense[:, self._rows, self._cols] = packed
+            dense[:, self._cols, self._rows] = packed  # the upper triangle mirrors the lower
+            factor, info = torch.linalg.cholesky_ex(dense)
+            # M^-1 = L^-T L^-1: (M^-1)_ii is the squared norm of column i of L^-1 (one triangular solve)
+            eye = torch.eye(self._nv, dtype=dense.dtype, device=dense.device).expand_as(dense)
+            inverse_factor = torch.linalg.solve_triangular(factor, eye, upper=False)
+            diagonal = inverse_factor.square().sum(dim=-2)
+            self._diagonal = torch.where((info == 0).unsqueeze(-1), diagonal, torch.nan)
+            self._step = step
+        return self._diagonal  # type: ignore[no-any-return]
+
+    @staticmethod
+    def shared(entity: Any, mj_model: Any, device: str) -> MassMatrixResponse:
+        """The entity's one instance (made by its first group that needs it)."""
+        found = getattr(entity, "_drive_envelope_mass_response", None)
+        if not isinstance(found, MassMatrixResponse):
+            found = MassMatrixResponse(mj_model, device)
+            entity._drive_envelope_mass_response = found  # one per robot: its groups share the solve
+        return found
