@@ -267,6 +267,7 @@ void CoupledSolver::SmoothVelocity(const mjModel* m, mjData* d, double dt) {
     }
   }
 
+  if (keep_smooth_) smooth_.assign(force, force + nv);  // constraints=1 forms qfrc_smooth from it
   HalfSolve(m, d, force);
   for (int r = 0; r < nrow_; r++) qvel_[r] = d->qvel[rows_[r].dof];
 }
@@ -382,6 +383,7 @@ void CoupledSolver::FullResponse(const mjData* d) {
 
 int CoupledSolver::Compute(const mjModel* m, mjData* d) {
   solves_ = 0;
+  constraint_solves_ = 0;
   shift_pending_ = false;
   double dt = m->opt.timestep;
   bool valid = dt > 0 && std::isfinite(dt);
@@ -410,6 +412,7 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
     effort_[k] = 0;
   }
   int sweeps = 0;
+  keep_smooth_ = setting.kind == SolverKind::kExact && setting.constraints;
   if (any) {
     SmoothVelocity(m, d, dt);
     ImplicitDamping(m, d, dt);
@@ -418,6 +421,7 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
     if (setting.kind == SolverKind::kExact) {
       Prepare(d, dt);
       sweeps = Sweep(m, d, dt);
+      if (setting.constraints) sweeps += Constrained(m, d, dt);
     } else {
       FullResponse(d);
       if (setting.kind == SolverKind::kTgs) BiasVelocity(m, d, dt);

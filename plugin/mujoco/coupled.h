@@ -47,6 +47,9 @@ class CoupledSolver {
   // row solves (clamp evaluations) of the last Compute
   int solves() const { return solves_; }
 
+  // MuJoCo constraint solves (mj_fwdConstraint) the last Compute ran itself (constraints=1)
+  int constraint_solves() const { return constraint_solves_; }
+
  private:
   // one unknown of the solve: a drive's DOF, or a damped DOF without a drive
   struct Row {
@@ -93,6 +96,14 @@ class CoupledSolver {
   void Velocities();
   bool Newton(const mjData* d, double dt, int* iterations);
   int Sweep(const mjModel* m, const mjData* d, double dt);
+  int Settle(const mjData* d, double dt);
+
+  // constraints=1 (constrained.cc): Newton steps on the drives with MuJoCo's constraint solve in
+  // the loop, each linearised with the constrained Hessian M + h*D' + J'*D*J; returns the steps
+  int Constrained(const mjModel* m, mjData* d, double dt);
+  void ConstrainedVelocity(const mjModel* m, mjData* d, double dt);
+  double Violation(double dt) const;
+  bool ConstrainedResponse(const mjModel* m, mjData* d, double dt);
 
   // PhysX's articulation iteration (articulation.cc): from the free velocities and A, the rows
   // in one Gauss-Seidel sweep per iteration, root to leaves; returns the sweeps
@@ -137,6 +148,19 @@ class CoupledSolver {
   bool shift_pending_ = false;
   std::vector<double> bias_;             // per row, h*(M^-1 * velocity-dependent bias) (tgs)
   std::vector<mjtNum> bias_force_;       // scratch over the dofs
+
+  // constraints=1 (constrained.cc)
+  bool keep_smooth_ = false;             // SmoothVelocity keeps the smooth force in smooth_
+  int constraint_solves_ = 0;
+  std::vector<mjtNum> smooth_;           // qfrc_smooth without the drives (nv)
+  std::vector<mjtNum> warm_;             // MuJoCo's qacc_warmstart, restored after the loop (nv)
+  std::vector<mjtNum> cacc_, cfactor_;   // end-of-step acceleration (nv), sparse factor (nC)
+  std::vector<mjtNum> cdinv_;            // its 1/diag (nv)
+  std::vector<mjtNum> hess_, unit_, col_;  // dense M + h*D' + J'*D*J (nv*nv), solve scratch (nv)
+  std::vector<mjtNum> jar_;              // J*qacc - aref (nefc, grown as needed)
+  std::vector<double> cv_;               // per row, MuJoCo's end-of-step velocity [rad/s or m/s]
+  std::vector<double> damp0_;            // per row, the integrator's damping derivative
+  std::vector<double> best_effort_;      // per drive, the checked efforts closest to inside
 };
 
 }  // namespace drive_envelope::mujoco_plugin

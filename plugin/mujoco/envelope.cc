@@ -338,14 +338,22 @@ bool SolverSetting::FromModel(const mjModel* m, int id, SolverSetting* setting,
              ": expected an integer in [0, 255]";
     return false;
   }
-  if (size == 4 && value[3] != 0) {
-    *error = where + "[3] (constraints) = " + Number(value[3]) +
-             ": expected 0 (the drives are solved before MuJoCo's constraints)";
+  double constraints = size == 4 ? value[3] : 0;
+  if (!(constraints == 0 || constraints == 1)) {
+    *error = where + "[3] (constraints) = " + Number(constraints) +
+             ": expected 0 (drives solved before MuJoCo's constraints) or 1 (with them)";
+    return false;
+  }
+  if (constraints == 1 && kind != 0) {
+    // PhysX's PGS/TGS iterate the drives against the articulation alone: no rule to port
+    *error = where + "[3] (constraints) = 1 with solver " + Number(kind) +
+             ": expected solver 0 (exact); pgs and tgs solve the drives before the constraints";
     return false;
   }
   out.kind = static_cast<SolverKind>(static_cast<int>(kind));
   out.position_iterations = static_cast<int>(position);
   out.velocity_iterations = static_cast<int>(velocity);
+  out.constraints = constraints == 1;
   *setting = out;
   return true;
 }
@@ -446,6 +454,7 @@ void Envelope::Compute(const mjModel* m, mjData* d, int instance) {
   if (!solver_) return;
   last_iterations_ = solver_->Compute(m, d);
   last_solves_ = solver_->solves();
+  last_constraint_solves_ = solver_->constraint_solves();
 }
 
 void Envelope::Advance(const mjModel* m, mjData* d) {

@@ -69,6 +69,7 @@ struct SolverSetting {
   SolverKind kind = SolverKind::kExact;
   int position_iterations = 1;   // [1, 255]: PGS's position sweeps, TGS's substeps
   int velocity_iterations = 0;   // [0, 255]; PGS runs at least one (PhysX's writeback sweep)
+  bool constraints = false;      // exact only: the drives re-solved with MuJoCo's constraint solve
 
   // reads numeric id (-1: absent, the exact solve); on a bad value returns false and writes the
   // reason to error
@@ -126,7 +127,9 @@ class Envelope {
   // not in plugin_state, so mjSTATE_FULLPHYSICS holds physics only (as MuJoCo's pid: nstate 0).
   int last_iterations() const { return last_iterations_; }
   int last_solves() const { return last_solves_; }
-  void ResetStats() { last_iterations_ = last_solves_ = 0; }
+  // constraint solves (mj_fwdConstraint calls) the last computation ran itself (constraints=1)
+  int last_constraint_solves() const { return last_constraint_solves_; }
+  void ResetStats() { last_iterations_ = last_solves_ = last_constraint_solves_ = 0; }
 
  private:
   explicit Envelope(std::unique_ptr<CoupledSolver> solver);
@@ -134,6 +137,7 @@ class Envelope {
   std::unique_ptr<CoupledSolver> solver_;  // leader only
   int last_iterations_ = 0;
   int last_solves_ = 0;
+  int last_constraint_solves_ = 0;
 };
 
 // the lowest instance of this plugin in m (the leader), or -1

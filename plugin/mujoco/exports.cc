@@ -73,4 +73,14 @@ __attribute__((visibility("default"))) int drive_envelope_solver_stats(const voi
   return 0;
 }
 
+// constraint solves (mj_fwdConstraint) the leader's last computation ran itself: 0 unless the
+// solver setting has constraints = 1 and the step had constraint rows
+__attribute__((visibility("default"))) int drive_envelope_constraint_solves(
+    const void* instance_data, int* constraint_solves) {
+  if (instance_data == nullptr) return -1;
+  const auto* envelope = static_cast<const drive_envelope::mujoco_plugin::Envelope*>(instance_data);
+  *constraint_solves = envelope->last_constraint_solves();
+  return 0;
+}
+
 }  // extern "C"

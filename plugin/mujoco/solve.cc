@@ -303,7 +303,12 @@ int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
   if (!any) return 0;
   FullResponse(d);
 
+  return Settle(d, dt);
+}
+
+int CoupledSolver::Settle(const mjData* d, double dt) {
   // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
+  int n = nrow_;
   int iterations = 0;
   if (Newton(d, dt, &iterations)) return iterations;
   for (int r = 0; r < n; r++) stale_[r] = 1;

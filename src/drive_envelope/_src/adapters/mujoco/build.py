@@ -50,6 +50,7 @@ class PluginError(DriveEnvelopeError, RuntimeError):
 PLUGIN_SOURCES = (
     "CMakeLists.txt",
     "articulation.cc",
+    "constrained.cc",
     "coupled.cc",
     "coupled.h",
     "drive_math.h",

@@ -6,7 +6,7 @@ The setting lives in the model as the custom numeric :data:`SOLVER_NUMERIC`::
     data[0]  solver               0 exact, 1 pgs, 2 tgs
     data[1]  position_iterations  [1, 255]: PGS's position sweeps, TGS's substeps
     data[2]  velocity_iterations  [0, 255] (PGS runs at least one, as PhysX does)
-    data[3]  constraints          0 (reserved: the drives are solved before MuJoCo's constraints)
+    data[3]  constraints          0: drives solved before MuJoCo's constraints; 1 (exact only): with them
 
 Why a custom numeric: the setting belongs to the model as a whole (PhysX's solver type is the
 scene's, and one MuJoCo model is one scene), MuJoCo's writer keeps it through ``mj_saveLastXML``,
@@ -60,6 +60,9 @@ class MjSolver:
     """PGS: position sweeps over the drives; TGS: substeps of ``dt/position_iterations`` [-]."""
     velocity_iterations: int
     """Velocity sweeps after them; PGS runs at least one whatever is set, as PhysX does [-]."""
+    constraints: bool = False
+    """``"exact"`` only: each step's efforts re-solved with MuJoCo's constraint solve in the loop
+    until every drive is inside its envelope at the velocity MuJoCo integrates (``set_solver``)."""
 
 
 def _iterations(value: object, name: str, low: int, where: str) -> int:
@@ -91,6 +94,7 @@ def set_solver(
     *,
     position_iterations: int = 4,
     velocity_iterations: int = 1,
+    constraints: bool = False,
 ) -> None:
     """Choose how the plugin solves the drives of a model: exactly, or as PhysX's PGS or TGS iterate.
 
@@ -102,6 +106,16 @@ def set_solver(
     ``solver_position_iteration_count`` / ``solver_velocity_iteration_count``; PhysX's defaults 4
     and 1); ``"exact"`` ignores them.
 
+    ``constraints=True`` (``"exact"`` only) puts MuJoCo's constraint solve (contacts, joint limits,
+    equalities, friction loss) into the drives' solve: inside the plugin's step, each candidate set
+    of efforts runs through ``mj_fwdConstraint`` (warm-started from the last one) and the
+    integrator's velocity update, and is re-solved by Newton steps on the constrained Hessian
+    ``M + h*D' + J'*D*J`` until MuJoCo's own solve shows every drive inside its envelope (or letting
+    go) at the velocity it integrates, at most 4 re-solves per step (then the checked set closest to
+    inside). Every step costs one constraint solve more, each re-solve one more again
+    (``docs/mujoco.md``, "Constraints solved with the drives"). Without constraint rows in a step,
+    and under RK4, it is the default solve; the default (``False``) is unchanged.
+
     On an ``MjSpec`` this adds (or updates) the custom numeric :data:`SOLVER_NUMERIC`; on an
     ``MjModel`` compiled with it, it changes the numbers in place, effective at the next step of
     every ``MjData`` of that model.
@@ -111,17 +125,26 @@ def set_solver(
         solver: ``"exact"``, ``"pgs"`` or ``"tgs"``.
         position_iterations: Position iterations, in [1, 255] [-].
         velocity_iterations: Velocity iterations, in [0, 255] [-].
+        constraints: Solve the drives with MuJoCo's constraints (``"exact"`` only) [-].
 
     Raises:
-        InputError: an unknown solver, an iteration count out of range, an ``MjModel`` compiled
-            without the numeric, or an object that is neither.
+        InputError: an unknown solver, an iteration count out of range, ``constraints`` not a bool
+            or set with ``"pgs"``/``"tgs"``, an ``MjModel`` compiled without the numeric, or an
+            object that is neither.
     """
     where = "set_solver"
     if solver not in SOLVERS:
         raise InputError(f"{where}: argument 'solver' = {solver!r}: expected one of 'exact', 'pgs', 'tgs'")
     position = _iterations(position_iterations, "position_iterations", 1, where)
     velocity = _iterations(velocity_iterations, "velocity_iterations", 0, where)
-    values = [float(SOLVERS.index(solver)), float(position), float(velocity), 0.0]
+    if not isinstance(constraints, bool):
+        raise InputError(f"{where}: argument 'constraints' = {constraints!r}: expected True or False")
+    if constraints and solver != "exact":
+        raise InputError(
+            f"{where}: argument 'constraints' = True with solver {solver!r}: expected solver 'exact' "
+            "(PhysX's PGS and TGS solve the drives before the constraints)"
+        )
+    values = [float(SOLVERS.index(solver)), float(position), float(velocity), float(constraints)]
     import mujoco
 
     if _is_spec(spec_or_model):
@@ -144,7 +167,7 @@ def set_solver(
             "before compiling (the plugin finds the setting when an MjData is made), then change it here"
         )
     adr, size = int(model.numeric_adr[index]), int(model.numeric_size[index])
-    if size not in (3, _SIZE):
+    if size not in (3, _SIZE) or (size == 3 and constraints):
         raise InputError(f"{where}: custom numeric {SOLVER_NUMERIC!r} has {size} number(s): expected {_SIZE}")
     model.numeric_data[adr : adr + size] = values[:size]
 
@@ -175,13 +198,16 @@ def get_solver(spec_or_model: mujoco.MjSpec | mujoco.MjModel) -> MjSolver:
     if values is None:
         return MjSolver(solver="exact", position_iterations=1, velocity_iterations=0)
     code = values[0] if values else math.nan
-    if len(values) not in (3, 4) or code not in (0.0, 1.0, 2.0):
+    flag = values[3] if len(values) == 4 else 0.0
+    if len(values) not in (3, 4) or code not in (0.0, 1.0, 2.0) or flag not in (0.0, 1.0) or (flag and code):
         raise InputError(
             f"{where}: custom numeric {SOLVER_NUMERIC!r} = {values}: expected "
-            "'solver position_iterations velocity_iterations constraints' with solver 0, 1 or 2"
+            "'solver position_iterations velocity_iterations constraints' with solver 0, 1 or 2 "
+            "and constraints 0, or 1 with solver 0"
         )
     return MjSolver(
         solver=SOLVERS[int(code)],
         position_iterations=int(values[1]),
         velocity_iterations=int(values[2]),
+        constraints=bool(flag),
     )
