@@ -13,6 +13,7 @@ in torch at the current velocity. Needs mjlab (MuJoCo 3.11): run it with ``.venv
 from __future__ import annotations
 
 import argparse
+import logging
 
 import numpy as np
 
@@ -31,7 +32,7 @@ def main() -> None:
     from mjlab.sim import Simulation, SimulationCfg
     from mjlab.terrains import TerrainEntityCfg
 
-    wp.config.quiet = True
+    wp.config.log_level = logging.WARNING  # stdout: only what the example prints
     hips = PerformanceEnvelopeActuatorCfg(
         target_names_expr=(".*_hip_joint", ".*_thigh_joint"),
         stiffness=40.0,

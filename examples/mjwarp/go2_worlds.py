@@ -13,6 +13,7 @@ peak effort and speed. Runs on the CPU (Warp's CPU device) or a GPU.
 from __future__ import annotations
 
 import argparse
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +42,7 @@ def main() -> None:
             f"needs the Menagerie Go2 at {args.model}: get unitree_go2/go2.xml from mujoco_menagerie "
             "and give it with --model"
         )
-    wp.config.quiet = True
+    wp.config.log_level = logging.WARNING  # stdout: only what the example prints
     load_plugin()
     spec = mujoco.MjSpec.from_file(str(args.model))
     for joint in list(spec.body("base").joints):
