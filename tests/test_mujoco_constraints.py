@@ -154,3 +154,20 @@ def test_menagerie_anymal_on_the_floor_stays_inside(mujoco: Any) -> None:
     assert results[False]["outside"] > 0.001 and results[False]["worst"] > 0.01
     assert results[True]["outside"] <= 0.001 and results[True]["worst"] < 1e-3
     assert 1.0 <= results[True]["solves"] < 1.5  # one check per step, a re-solve where it is needed
+
+
+@pytest.mark.warp
+def test_mjwarp_refuses_the_setting_in_one_line(mujoco: Any) -> None:
+    pytest.importorskip("mujoco_warp")
+    import warp as wp
+
+    from drive_envelope.mjwarp import put_model
+    from drive_envelope.mujoco import add_drive, set_solver
+
+    wp.config.quiet = True  # type: ignore[attr-defined]
+    spec = mujoco.MjSpec.from_string(HINGE)
+    add_drive(spec, "j", envelope=ENVELOPE, stiffness=200.0, damping=0.0, effort_sensor=False)
+    set_solver(spec, "exact", constraints=True)
+    with pytest.raises(InputError, match=r"\(constraints\) = 1: not available in MJWarp") as caught:
+        put_model(spec)
+    assert "\n" not in str(caught.value)

@@ -91,6 +91,7 @@ class EnvelopeDrives:
         self._untracked = wp.zeros((1, 2), dtype=wp.int32, device=device)
         self._no_delay = wp.zeros((1, 1), dtype=wp.float32, device=device)
         self._no_bias = wp.zeros((1, 1), dtype=wp.float32, device=device)
+        self.solver_codes()  # a model with constraints = 1 is refused when it is put, not at a step
 
     @property
     def count(self) -> int:
@@ -131,9 +132,17 @@ class EnvelopeDrives:
         (``drive_envelope.mujoco.set_solver`` on :attr:`mj_model` changes it); a CUDA graph keeps
         the values it was captured with.
         """
-        from drive_envelope._src.adapters.mujoco.solver import SOLVERS, get_solver
+        from drive_envelope._src.adapters.mujoco.solver import SOLVER_NUMERIC, SOLVERS, get_solver
+        from drive_envelope._src.errors import InputError
 
         setting = get_solver(self.mj_model)
+        if setting.constraints:
+            # the C plugin's loop calls MuJoCo's constraint solve inside the actuation stage; MJWarp's
+            # act_bias hook has no such call per world yet: refused, never silently ignored
+            raise InputError(
+                f"drive_envelope.mjwarp: custom numeric {SOLVER_NUMERIC!r}[3] (constraints) = 1: not "
+                "available in MJWarp (the C plugin only); expected 0: set_solver(model, 'exact')"
+            )
         return SOLVERS.index(setting.solver), setting.position_iterations, setting.velocity_iterations
 
     def _field(self, m: Any, name: str) -> Any:
