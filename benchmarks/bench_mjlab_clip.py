@@ -147,7 +147,7 @@ def main() -> None:
         pd, dc = laws[name] / laws["ideal_pd"], laws[name] / laws["dc_motor"]
         print(f"  {name} / ideal_pd = {pd:.2f}x, / dc_motor = {dc:.2f}x")
     responses = _median_times(_responses(args.envs), args.rounds, args.repeat)
-    print(f"update()'s mass-matrix response at {args.envs} worlds (per robot and step, shared by its groups):")
+    print(f"update()'s mass-matrix response at {args.envs} worlds (per robot and step, all its groups):")
     for name, value in responses.items():
         print(f"  {name:<22} {value * 1e6:9.1f} us ({value * 1e9 / args.envs:.0f} ns a world)")
 

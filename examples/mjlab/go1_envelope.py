@@ -4,8 +4,8 @@ Builds a two-environment mjlab scene of the Go1 from mjlab's asset zoo, its hips
 ``PerformanceEnvelopeActuatorCfg`` group and its knees another (the Go1's own limits), squats it
 for a second on CPU and prints each group's peak effort and speed. ``--implicit`` solves the drives
 in MJWarp's step (PhysX's implicit drive, every drive together) instead of clipping the PD torque
-in torch at the current velocity. Needs mjlab (MuJoCo 3.11): run it with ``.venv-mjlab`` (see
-``scripts/test_mjlab.sh``).
+in torch (PhysX's clamp at the end-of-step velocity, the explicit default; docs/mjlab.md). Needs
+mjlab (MuJoCo 3.11): run it with ``.venv-mjlab`` (see ``scripts/test_mjlab.sh``).
 
     .venv-mjlab/bin/python examples/mjlab/go1_envelope.py [--implicit]
 """
