@@ -29,6 +29,11 @@ from drive_envelope._src.adapters.isaaclab.implicit import (
     author_implicit_envelopes,
     check_implicit_actuator,
 )
+from drive_envelope._src.adapters.isaaclab.newton_route import (
+    ENVELOPE_CLAMPING_SCHEMA,
+    author_envelope_clamping,
+    register_envelope_clamping,
+)
 from drive_envelope._src.adapters.isaaclab.tensor_api import (
     DRIVE_MODEL_ORDER,
     drive_model_properties,
@@ -38,14 +43,17 @@ from drive_envelope._src.adapters.isaaclab.tensor_api import (
 
 __all__ = [
     "DRIVE_MODEL_ORDER",
+    "ENVELOPE_CLAMPING_SCHEMA",
     "ImplicitEnvelopeSetup",
     "PerformanceEnvelopeActuator",
     "PerformanceEnvelopeActuatorCfg",
+    "author_envelope_clamping",
     "author_implicit_envelopes",
     "check_implicit_actuator",
     "drive_model_properties",
     "envelope_from_drive_model_properties",
     "randomize_actuator_envelope",
+    "register_envelope_clamping",
     "set_response_from_mass_matrix",
     "write_envelope_to_sim",
 ]

@@ -1,0 +1,173 @@
+"""Isaac Lab 3.0's Newton-actuator route: the envelope as a clamping stage of ``NewtonActuator`` prims.
+
+With ``SimulationCfg(use_newton_actuators=True)`` (3.0's default) Isaac Lab does not run explicit
+actuator models itself: ``define_actuator_properties`` authors a ``NewtonActuator`` prim per joint
+from its own cfg types only (``IdealPDActuatorCfg`` -> ``NewtonPDControlAPI`` +
+``NewtonMaxEffortClampingAPI``, ...; any other cfg, ours included, is refused by
+``validate_newton_native_actuator_cfgs``), and Newton builds ``newton.actuators.Actuator`` objects
+from those prims: ``ModelBuilder.add_usd`` on the Newton backend, Isaac Lab's
+``NewtonActuatorAdapter.from_usd`` on PhysX/OVPhysX. Both parse a prim with
+``newton.actuators.parse_actuator_prim``, which turns every applied API schema found in
+``register_actuator_component``'s table into a component.
+
+So the envelope rides on those prims: :func:`register_envelope_clamping` registers a codeless USD
+API schema, ``DriveEnvelopeClampingAPI`` (``usd_schema/``, attributes
+``newton:envelopeMaxEffort`` ...), with USD and with Newton as a ``ComponentKind.CLAMPING`` whose
+class is ``ClampingPerformanceEnvelope``; :func:`author_envelope_clamping` applies it to the prims
+Isaac Lab authored, after spawning and before the stage is read. Newton reads only a registered
+schema's own attributes, and USD lists an applied API schema only once it is registered; hence the
+codeless schema rather than bare attributes (the other schemas' ``newton:kp`` ... would reach the
+clamp otherwise, and an unregistered schema name is dropped by ``GetAppliedSchemas``).
+
+USD builds its schema registry once, on first use: the plugin must be registered before that, as
+``newton_usd_schemas`` does on import. Importing ``drive_envelope.isaaclab`` does not import pxr,
+so call :func:`register_envelope_clamping` early (before a stage is created); when USD's registry
+was built first, it raises a one-line ``InputError`` saying so.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
+from drive_envelope._src.errors import InputError
+
+__all__ = ["ENVELOPE_CLAMPING_SCHEMA", "author_envelope_clamping", "register_envelope_clamping"]
+
+ENVELOPE_CLAMPING_SCHEMA = "DriveEnvelopeClampingAPI"
+_SCHEMA_DIR = Path(__file__).resolve().parent / "usd_schema"
+# USD attribute (newton: namespace, which is the one Newton's parser reads) per spec field; the
+# "envelope" prefix keeps them apart from NewtonMaxEffortClampingAPI's newton:maxEffort on the same prim
+_USD_ATTRIBUTES = {
+    field: "newton:envelope" + "".join(word.capitalize() for word in field.split("_"))
+    for field in ENVELOPE_FIELDS
+}
+# the snake_case keys Newton's parser makes of them (newton:envelopeMaxEffort -> envelope_max_effort)
+_PARSED_KEYS = {"envelope_" + field: field for field in ENVELOPE_FIELDS}
+
+
+@functools.cache
+def register_envelope_clamping() -> type:
+    """Register ``DriveEnvelopeClampingAPI`` with USD and with Newton's actuator parser (once).
+
+    Returns:
+        The clamping class Newton builds for the schema: a ``ClampingPerformanceEnvelope`` that
+        also takes the parsed USD keys (``envelope_max_effort`` ...).
+
+    Raises:
+        InputError: USD's schema registry was built before this call (register earlier).
+    """
+    from newton.actuators import ComponentKind, register_actuator_component
+    from pxr import Plug, Usd
+
+    from drive_envelope._src.adapters.newton.clamp import build
+
+    Plug.Registry().RegisterPlugins([str(_SCHEMA_DIR)])
+    if Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(ENVELOPE_CLAMPING_SCHEMA) is None:
+        raise InputError(
+            f"register_envelope_clamping: USD's schema registry was built before the "
+            f"{ENVELOPE_CLAMPING_SCHEMA} plugin ({_SCHEMA_DIR}) was registered; call "
+            f"drive_envelope.isaaclab.register_envelope_clamping() before creating a USD stage, or "
+            f"set PXR_PLUGINPATH_NAME={_SCHEMA_DIR}"
+        )
+    base: Any = build()
+
+    class ClampingPerformanceEnvelope(base):  # type: ignore[misc,valid-type]
+        """``ClampingPerformanceEnvelope`` as built from ``DriveEnvelopeClampingAPI`` prims."""
+
+        @classmethod
+        def resolve_arguments(cls, args: dict[str, Any]) -> dict[str, Any]:
+            """Map the parsed USD keys (``envelope_max_effort`` ...) to the spec names and validate."""
+            return resolve_envelope_arguments({_PARSED_KEYS.get(k, k): v for k, v in args.items()})
+
+    ClampingPerformanceEnvelope.__module__ = "drive_envelope.isaaclab"
+    register_actuator_component(ENVELOPE_CLAMPING_SCHEMA, ClampingPerformanceEnvelope, ComponentKind.CLAMPING)
+    return ClampingPerformanceEnvelope
+
+
+def _envelope_values(envelope: PerformanceEnvelope | Mapping[str, Any]) -> dict[str, float]:
+    """The four SI floats of ``envelope`` (a ``PerformanceEnvelope`` or a dict of spec names)."""
+    if isinstance(envelope, PerformanceEnvelope):
+        return {field: float(getattr(envelope, field)) for field in ENVELOPE_FIELDS}
+    if not isinstance(envelope, Mapping):
+        raise InputError(
+            f"author_envelope_clamping: envelope: expected a PerformanceEnvelope or a dict of "
+            f"{', '.join(ENVELOPE_FIELDS)}, got {type(envelope).__name__}"
+        )
+    try:
+        return resolve_envelope_arguments(dict(envelope))
+    except InputError as exc:
+        raise InputError(f"author_envelope_clamping: envelope: {exc}") from None
+
+
+def author_envelope_clamping(
+    stage: Any,
+    articulation_prim_path: str,
+    envelope: PerformanceEnvelope | Mapping[str, Any],
+    *,
+    joint_names_expr: str | Sequence[str] = ".*",
+) -> list[str]:
+    """Apply the envelope as a clamping stage to the ``NewtonActuator`` prims of some joints.
+
+    Call it after Isaac Lab spawned the articulation (``Articulation(cfg)`` or the scene's spawn,
+    which authors the prims from an ``IdealPDActuatorCfg`` / ``DCMotorCfg`` ...) and before the
+    stage is cloned and read (``replicate``, ``sim.reset``). The stage applies after the prim's
+    other clamping stages (innermost first).
+
+    Args:
+        stage: The USD stage (``pxr.Usd.Stage``).
+        articulation_prim_path: Root prim of the articulation whose actuators get the stage
+            (e.g. ``"/World/Env_0/Robot"``); prims are found under it.
+        envelope: A ``PerformanceEnvelope`` or a dict of ``max_effort`` [N*m or N],
+            ``max_actuator_velocity`` [rad/s or m/s], ``velocity_dependent_resistance``
+            [N*m*s/rad or N*s/m], ``speed_effort_gradient`` [(rad/s)/(N*m) or (m/s)/N] (SI
+            numbers or strings with units).
+        joint_names_expr: Regular expression(s), matched in full against the target joint's name.
+
+    Returns:
+        The paths of the prims authored, in stage order.
+
+    Raises:
+        InputError: bad envelope, root not found, or no active ``NewtonActuator`` prim under it
+            targets a matching joint (Isaac Lab authors them only with
+            ``use_newton_actuators=True`` and one of its own explicit cfgs for those joints).
+    """
+    values = _envelope_values(envelope)
+    patterns = [joint_names_expr] if isinstance(joint_names_expr, str) else list(joint_names_expr)
+    try:
+        compiled = [re.compile(p) for p in patterns]
+    except (re.error, TypeError) as exc:
+        raise InputError(f"author_envelope_clamping: joint_names_expr {joint_names_expr!r}: {exc}") from None
+    register_envelope_clamping()
+    from pxr import Sdf, Usd
+
+    root = stage.GetPrimAtPath(articulation_prim_path)
+    if not root.IsValid():
+        raise InputError(
+            f"author_envelope_clamping: articulation_prim_path {articulation_prim_path!r}: no such prim"
+        )
+    authored: list[str] = []
+    for prim in Usd.PrimRange(root):
+        if prim.GetTypeName() != "NewtonActuator":
+            continue
+        targets = prim.GetRelationship("newton:targets")
+        names = [str(t).rsplit("/", 1)[-1] for t in (targets.GetTargets() if targets else [])]
+        if not names or not any(c.fullmatch(names[0]) for c in compiled):
+            continue
+        prim.AddAppliedSchema(ENVELOPE_CLAMPING_SCHEMA)
+        for field, attribute in _USD_ATTRIBUTES.items():
+            prim.CreateAttribute(attribute, Sdf.ValueTypeNames.Float).Set(values[field])
+        authored.append(str(prim.GetPath()))
+    if not authored:
+        raise InputError(
+            f"author_envelope_clamping: no active NewtonActuator prim under {articulation_prim_path!r} "
+            f"targets a joint matching {patterns}; Isaac Lab authors them only with "
+            f"SimulationCfg(use_newton_actuators=True) and one of its explicit cfgs (IdealPDActuatorCfg, "
+            f"DCMotorCfg, ...) for those joints"
+        )
+    return authored
