@@ -52,7 +52,12 @@ def split_logs(folder: Path) -> dict[str, list[Path]]:
 
 
 def run_identify(
-    splits: dict[str, list[Path]], fit: str, seed: int, generations: int, restarts: int = 3
+    splits: dict[str, list[Path]],
+    fit: str,
+    seed: int,
+    generations: int,
+    restarts: int = 3,
+    stand: Path = STAND,
 ) -> dict[str, object]:
     """One identification; its errors [mrad], wall time [s] and whether each reported line binds."""
     from drive_envelope._src.identify.canonical import binding_lines
@@ -61,7 +66,7 @@ def run_identify(
     started = time.perf_counter()
     result = identify(
         splits["train"],
-        STAND,
+        stand,
         validate=splits["holdout"],
         fit=fit.split(","),
         options=SearchOptions(seed=seed, generations=generations, restarts=restarts),
@@ -220,6 +225,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--generations", type=int, default=60, help="identify's generations")
     parser.add_argument("--restarts", type=int, default=3, help="identify's restarts (default 3)")
     parser.add_argument("--fit", default=ENVELOPE_FIT, help="identify's --fit")
+    parser.add_argument("--stand", type=Path, default=STAND, help="identify's stand (a variant to compare)")
     parser.add_argument("--json", type=Path, default=None, help="also write the results as JSON")
     args = parser.parse_args(argv)
     if not args.data.is_dir():
@@ -241,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
             seed = seeds[round_index % len(seeds)]
             print(f"round {round_index + 1}: identify (seed {seed})", file=sys.stderr)
             runs.setdefault("identify", []).append(
-                run_identify(splits, args.fit, seed, args.generations, args.restarts)
+                run_identify(splits, args.fit, seed, args.generations, args.restarts, args.stand)
             )
             for model in args.bam_models.split(",") if have_bam else ():
                 print(f"round {round_index + 1}: bam.fit {model} ({args.bam_trials} trials)", file=sys.stderr)
