@@ -77,9 +77,8 @@ def test_from_usd_builds_and_steps_the_envelope_clamping_stage() -> None:
     rng = np.random.default_rng(7)
     n = NUM_ENVS * 3
     q = rng.uniform(-1.0, 1.0, n).astype(np.float32)
-    qd = np.tile(np.array([-4.0, -2.5, -1.0, 0.0, 0.5, 1.5, 2.9, 3.5, 2.0, -0.2, 0.0, 1.0], np.float32), 1)[
-        :n
-    ]
+    # below and above max_actuator_velocity, both signs, at rest: every side of the envelope (n = 12)
+    qd = np.array([-4.0, -2.5, -1.0, 0.0, 0.5, 1.5, 2.9, 3.5, 2.0, -0.2, 0.0, 1.0], np.float32)
     target = rng.uniform(-1.0, 1.0, n).astype(np.float32)
     state = SimpleNamespace(joint_q=wp.array(q, device="cpu"), joint_qd=wp.array(qd, device="cpu"))
     control = SimpleNamespace(
