@@ -86,6 +86,7 @@ def register_envelope_clamping() -> type:
             return resolve_envelope_arguments({_PARSED_KEYS.get(k, k): v for k, v in args.items()})
 
     ClampingPerformanceEnvelope.__module__ = "drive_envelope.isaaclab"
+    ClampingPerformanceEnvelope.__qualname__ = "ClampingPerformanceEnvelope"
     register_actuator_component(ENVELOPE_CLAMPING_SCHEMA, ClampingPerformanceEnvelope, ComponentKind.CLAMPING)
     return ClampingPerformanceEnvelope
 
