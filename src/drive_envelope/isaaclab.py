@@ -47,6 +47,7 @@ __all__ = [
     "ImplicitEnvelopeSetup",
     "PerformanceEnvelopeActuator",
     "PerformanceEnvelopeActuatorCfg",
+    "PerformanceEnvelopeArticulationCfg",
     "author_envelope_clamping",
     "author_implicit_envelopes",
     "check_implicit_actuator",
@@ -61,10 +62,18 @@ __all__ = [
 # Created by __getattr__ on first access (annotations only: the module stays free of Isaac Lab until then)
 PerformanceEnvelopeActuator: Any
 PerformanceEnvelopeActuatorCfg: Any
+PerformanceEnvelopeArticulationCfg: Any
 
 
 def __getattr__(name: str) -> Any:
     """Define the actuator and its cfg on first access (this imports ``isaaclab.actuators``)."""
+    if name == "PerformanceEnvelopeArticulationCfg":
+        from drive_envelope._src.adapters.isaaclab.newton_route import build_articulation_cfg
+
+        try:
+            return build_articulation_cfg()
+        except ImportError as exc:
+            raise ImportError(f"{name} needs Isaac Lab 3.x (isaaclab.assets, newton, pxr): {exc}") from exc
     if name in ("PerformanceEnvelopeActuator", "PerformanceEnvelopeActuatorCfg"):
         from drive_envelope._src.adapters.isaaclab.actuator import build
 

@@ -1,8 +1,9 @@
 """Isaac Lab 3.0's Newton-actuator route: the envelope as a Newton clamping stage, on CPU.
 
 With ``use_newton_actuators=True`` (3.0's default) Isaac Lab authors ``NewtonActuator`` prims from
-its own cfgs and Newton runs them. ``author_envelope_clamping`` adds ``DriveEnvelopeClampingAPI`` to
-the prims Isaac Lab authored for an ``IdealPDActuatorCfg``; Newton's ``ModelBuilder.add_usd`` builds
+its own cfgs and Newton runs them. ``PerformanceEnvelopeArticulationCfg`` (its ``_post_spawn`` calls
+``author_envelope_clamping``) adds ``DriveEnvelopeClampingAPI`` to the prims Isaac Lab authored
+for an ``IdealPDActuatorCfg``; Newton's ``ModelBuilder.add_usd`` builds
 our ``ClampingPerformanceEnvelope`` into ``model.actuators``. Newton's cartpole (two environments,
 MuJoCo Warp solver, CPU) steps; every applied effort Isaac Lab reports equals the float64 NumPy
 clamp (``drive_envelope.clamp_effort``) of the PD effort Newton computed, at the velocity the step
@@ -21,7 +22,7 @@ import pytest
 pytest.importorskip("isaaclab_newton.assets", reason="needs Isaac Lab 3.x: scripts/test_isaaclab3.sh")
 
 # registered before any USD stage exists: USD builds its schema registry once, on first use
-from drive_envelope.isaaclab import author_envelope_clamping, register_envelope_clamping
+from drive_envelope.isaaclab import PerformanceEnvelopeArticulationCfg, register_envelope_clamping
 
 register_envelope_clamping()
 
@@ -49,7 +50,6 @@ def test_cartpole_steps_with_the_envelope_as_newton_clamping_stage() -> None:
     import isaaclab.sim as sim_utils
     import torch
     from isaaclab.actuators import IdealPDActuatorCfg
-    from isaaclab.assets import ArticulationCfg
     from isaaclab.cloner import CloneCfg, clone_plan_from_env_0, replicate
     from isaaclab.sim import build_simulation_context
     from isaaclab_newton.assets import Articulation
@@ -64,7 +64,7 @@ def test_cartpole_steps_with_the_envelope_as_newton_clamping_stage() -> None:
     ) as sim:
         sim._app_control_on_stop_handle = None  # as Isaac Lab's own tests do without Kit
         sim_utils.create_prim("/World/Env_0", "Xform")
-        robot_cfg = ArticulationCfg(
+        robot_cfg = PerformanceEnvelopeArticulationCfg(
             prim_path="/World/Env_[^/]*/Robot",
             spawn=sim_utils.UsdFileCfg(usd_path=str(CARTPOLE)),
             # Isaac Lab authors NewtonPDControlAPI + NewtonMaxEffortClampingAPI (10 >= the envelope's cap)
@@ -73,14 +73,15 @@ def test_cartpole_steps_with_the_envelope_as_newton_clamping_stage() -> None:
                     joint_names_expr=[".*"], stiffness=50.0, damping=2.0, actuator_effort_limit=10.0
                 )
             },
+            envelope_clamping={"all": ENVELOPE},
         )
         positions = np.asarray([(3.0 * i, 0.0, 0.0) for i in range(NUM_ENVS)])
         clone_plan_from_env_0(
             CloneCfg(clone_template="/World/Env_{}"), (robot_cfg,), NUM_ENVS, 3.0, positions=positions
         )
         robot = Articulation(robot_cfg)
-        authored = author_envelope_clamping(sim.stage, "/World/Env_0/Robot", ENVELOPE)
-        assert len(authored) == 3
+        prims = [p for p in sim.stage.Traverse() if p.GetTypeName() == "NewtonActuator"]
+        assert len(prims) == 3 and all(p.HasAPI("DriveEnvelopeClampingAPI") for p in prims)
         replicate(sim.get_clone_plan())
         sim.reset()
         assert robot.joint_names == ["railCartJoint", "cartPoleJoint", "polePoleJoint"]
@@ -101,3 +102,36 @@ def test_cartpole_steps_with_the_envelope_as_newton_clamping_stage() -> None:
         assert saturated > 0  # the envelope bound, so the check above is not vacuous
         moved = robot.data.joint_pos.torch
         assert bool(torch.isfinite(moved).all()) and float(moved[:, 0].abs().max()) > 0.05
+
+
+def test_envelope_clamping_needs_newton_actuators() -> None:
+    """With use_newton_actuators=False Isaac Lab authors no NewtonActuator prims: one-line InputError."""
+    import isaaclab.sim as sim_utils
+    from isaaclab.actuators import IdealPDActuatorCfg
+    from isaaclab.sim import build_simulation_context
+    from isaaclab_newton.assets import Articulation
+
+    from drive_envelope import InputError
+
+    cfg = IdealPDActuatorCfg(joint_names_expr=[".*"], stiffness=50.0, damping=2.0)
+    with build_simulation_context(
+        device="cpu", gravity_enabled=True, add_ground_plane=False, sim_cfg=_newton_sim_cfg(False)
+    ) as sim:
+        sim._app_control_on_stop_handle = None
+        sim_utils.create_prim("/World/Env_0", "Xform")
+        spawn = sim_utils.UsdFileCfg(usd_path=str(CARTPOLE))
+        off = PerformanceEnvelopeArticulationCfg(
+            prim_path="/World/Env_0/Robot",
+            spawn=spawn,
+            actuators={"all": cfg},
+            envelope_clamping={"all": ENVELOPE},
+        )
+        with pytest.raises(
+            InputError, match=r"envelope_clamping: needs SimulationCfg\(use_newton_actuators=True\)"
+        ):
+            Articulation(off)
+        typo = off.replace(prim_path="/World/Env_1/Robot", envelope_clamping={"legs": ENVELOPE})
+        with pytest.raises(
+            InputError, match=r"group 'legs' is not a key of actuators \(expected one of \['all'\]\)"
+        ):
+            Articulation(typo)

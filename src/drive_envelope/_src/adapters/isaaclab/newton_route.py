@@ -37,7 +37,12 @@ from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["ENVELOPE_CLAMPING_SCHEMA", "author_envelope_clamping", "register_envelope_clamping"]
+__all__ = [
+    "ENVELOPE_CLAMPING_SCHEMA",
+    "author_envelope_clamping",
+    "build_articulation_cfg",
+    "register_envelope_clamping",
+]
 
 ENVELOPE_CLAMPING_SCHEMA = "DriveEnvelopeClampingAPI"
 _SCHEMA_DIR = Path(__file__).resolve().parent / "usd_schema"
@@ -172,3 +177,72 @@ def author_envelope_clamping(
             f"DCMotorCfg, ...) for those joints"
         )
     return authored
+
+
+@functools.cache
+def build_articulation_cfg() -> type:
+    """Import Isaac Lab, register the schema and define ``PerformanceEnvelopeArticulationCfg`` (once)."""
+    from isaaclab.assets import ArticulationCfg
+    from isaaclab.utils import configclass
+
+    register_envelope_clamping()  # now: the cfg is made before the scene's stage, the schema must be too
+
+    @configclass
+    class PerformanceEnvelopeArticulationCfg(ArticulationCfg):  # type: ignore[misc,valid-type]
+        """``ArticulationCfg`` whose Newton actuators get the envelope as a clamping stage.
+
+        For ``SimulationCfg(use_newton_actuators=True)``: give the groups Isaac Lab's own explicit
+        cfgs (``IdealPDActuatorCfg`` ...) in ``actuators`` and their envelopes in
+        ``envelope_clamping``; after Isaac Lab authored the group's ``NewtonActuator`` prims at
+        spawn (``_post_spawn``, Isaac Lab's hook for assets that author more USD schemas),
+        :func:`author_envelope_clamping` adds ``DriveEnvelopeClampingAPI`` to them, so clones and
+        every backend's Newton actuators carry it.
+        """
+
+        envelope_clamping: dict[str, Any] = {}  # noqa: RUF012  (configclass copies mutable defaults per instance)
+        """Envelope per actuator group name (a key of ``actuators``): a ``PerformanceEnvelope`` or a
+        dict of ``max_effort`` [N*m or N], ``max_actuator_velocity`` [rad/s or m/s],
+        ``velocity_dependent_resistance`` [N*m*s/rad or N*s/m], ``speed_effort_gradient``
+        [(rad/s)/(N*m) or (m/s)/N]."""
+
+        def _post_spawn(self, stage: Any) -> None:
+            """Author Isaac Lab's ``NewtonActuator`` prims, then the envelope on the groups named."""
+            # explicit base call: configclass may rebuild the class, which breaks zero-argument super()
+            ArticulationCfg._post_spawn(self, stage)
+            if not self.envelope_clamping:
+                return
+            _author_groups(self, stage)
+
+    PerformanceEnvelopeArticulationCfg.__module__ = "drive_envelope.isaaclab"
+    return PerformanceEnvelopeArticulationCfg
+
+
+def _author_groups(cfg: Any, stage: Any) -> None:
+    """Apply ``cfg.envelope_clamping`` to the spawned articulation(s), with one-line errors."""
+    from isaaclab.sim import SimulationContext
+    from isaaclab.sim.utils.queries import find_matching_prims
+
+    where = "PerformanceEnvelopeArticulationCfg.envelope_clamping"
+    actuators = cfg.actuators if isinstance(cfg.actuators, Mapping) else {}
+    for group in cfg.envelope_clamping:
+        if group not in actuators:
+            raise InputError(
+                f"{where}: group {group!r} is not a key of actuators (expected one of {sorted(actuators)})"
+            )
+    context = SimulationContext.instance()
+    if context is None or not context.cfg.use_newton_actuators:
+        raise InputError(
+            f"{where}: needs SimulationCfg(use_newton_actuators=True) (Newton's actuators run the "
+            f"clamping stage); with use_newton_actuators=False use PerformanceEnvelopeActuatorCfg"
+        )
+    path = (
+        cfg.spawn.spawn_path if cfg.spawn is not None and cfg.spawn.spawn_path is not None else cfg.prim_path
+    )
+    for prim in find_matching_prims(path, stage):
+        for group, envelope in cfg.envelope_clamping.items():
+            try:
+                author_envelope_clamping(
+                    stage, str(prim.GetPath()), envelope, joint_names_expr=actuators[group].joint_names_expr
+                )
+            except InputError as exc:
+                raise InputError(f"{where}[{group!r}]: {exc}") from None
