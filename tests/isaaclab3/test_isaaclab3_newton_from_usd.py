@@ -125,3 +125,28 @@ def test_errors_where_isaac_lab_cannot_take_the_envelope() -> None:
         author_envelope_clamping(stage, "/World/Nope", ENVELOPE)
     with pytest.raises(InputError, match=r"envelope: .*unknown argument 'max_torque'"):
         author_envelope_clamping(stage, "/World/Robot", {"max_torque": 5.0})
+
+
+def test_registering_after_usd_built_its_schema_registry_says_so() -> None:
+    """USD reads plugins into its schema registry once: too late is a one-line InputError (fresh process)."""
+    import subprocess
+    import sys
+
+    code = (
+        "from pxr import Usd\n"
+        "Usd.SchemaRegistry().FindAppliedAPIPrimDefinition('NewtonPDControlAPI')\n"
+        "from drive_envelope import InputError\n"
+        "from drive_envelope.isaaclab import register_envelope_clamping\n"
+        "try:\n"
+        "    register_envelope_clamping()\n"
+        "except InputError as exc:\n"
+        "    print(exc)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
+    )
+    line = out.stdout.strip()
+    assert "\n" not in line and line.startswith(
+        "register_envelope_clamping: USD's schema registry was built before"
+    )
+    assert "PXR_PLUGINPATH_NAME=" in line
