@@ -11,9 +11,10 @@ from those prims: ``ModelBuilder.add_usd`` on the Newton backend, Isaac Lab's
 ``register_actuator_component``'s table into a component.
 
 So the envelope rides on those prims: :func:`register_envelope_clamping` registers a codeless USD
-API schema, ``DriveEnvelopeClampingAPI`` (``usd_schema/``, attributes
-``newton:envelopeMaxEffort`` ...), with USD and with Newton as a ``ComponentKind.CLAMPING`` whose
-class is ``ClampingPerformanceEnvelope``; :func:`author_envelope_clamping` applies it to the prims
+API schema, ``DriveEnvelopeClampingAPI`` (``adapters/usd/newton_actuator.py`` and its
+``newton_schema/``, attributes ``newton:envelopeMaxEffort`` ...), with USD and with Newton
+(``adapters/newton/usd_clamping.py``) as a ``ComponentKind.CLAMPING`` whose class is
+``ClampingPerformanceEnvelope``; :func:`author_envelope_clamping` applies it to the prims
 Isaac Lab authored, after spawning and before the stage is read. Newton reads only a registered
 schema's own attributes, and USD lists an applied API schema only once it is registered; hence the
 codeless schema rather than bare attributes (the other schemas' ``newton:kp`` ... would reach the
@@ -28,12 +29,16 @@ was built first, it raises a one-line ``InputError`` saying so.
 from __future__ import annotations
 
 import functools
-import re
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
+from drive_envelope._src.adapters.newton.usd_clamping import register_clamping_component
+from drive_envelope._src.adapters.usd.newton_actuator import (
+    ENVELOPE_CLAMPING_SCHEMA,
+    apply_envelope_clamping,
+    register_schema,
+)
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -43,17 +48,6 @@ __all__ = [
     "build_articulation_cfg",
     "register_envelope_clamping",
 ]
-
-ENVELOPE_CLAMPING_SCHEMA = "DriveEnvelopeClampingAPI"
-_SCHEMA_DIR = Path(__file__).resolve().parent / "usd_schema"
-# USD attribute (newton: namespace, which is the one Newton's parser reads) per spec field; the
-# "envelope" prefix keeps them apart from NewtonMaxEffortClampingAPI's newton:maxEffort on the same prim
-_USD_ATTRIBUTES = {
-    field: "newton:envelope" + "".join(word.capitalize() for word in field.split("_"))
-    for field in ENVELOPE_FIELDS
-}
-# the snake_case keys Newton's parser makes of them (newton:envelopeMaxEffort -> envelope_max_effort)
-_PARSED_KEYS = {"envelope_" + field: field for field in ENVELOPE_FIELDS}
 
 
 @functools.cache
@@ -67,33 +61,9 @@ def register_envelope_clamping() -> type:
     Raises:
         InputError: USD's schema registry was built before this call (register earlier).
     """
-    from newton.actuators import ComponentKind, register_actuator_component
-    from pxr import Plug, Usd
-
-    from drive_envelope._src.adapters.newton.clamp import build
-
-    Plug.Registry().RegisterPlugins([str(_SCHEMA_DIR)])
-    if Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(ENVELOPE_CLAMPING_SCHEMA) is None:
-        raise InputError(
-            f"register_envelope_clamping: USD's schema registry was built before the "
-            f"{ENVELOPE_CLAMPING_SCHEMA} plugin ({_SCHEMA_DIR}) was registered; call "
-            f"drive_envelope.isaaclab.register_envelope_clamping() before creating a USD stage, or "
-            f"set PXR_PLUGINPATH_NAME={_SCHEMA_DIR}"
-        )
-    base: Any = build()
-
-    class ClampingPerformanceEnvelope(base):  # type: ignore[misc,valid-type]
-        """``ClampingPerformanceEnvelope`` as built from ``DriveEnvelopeClampingAPI`` prims."""
-
-        @classmethod
-        def resolve_arguments(cls, args: dict[str, Any]) -> dict[str, Any]:
-            """Map the parsed USD keys (``envelope_max_effort`` ...) to the spec names and validate."""
-            return resolve_envelope_arguments({_PARSED_KEYS.get(k, k): v for k, v in args.items()})
-
-    ClampingPerformanceEnvelope.__module__ = "drive_envelope.isaaclab"
-    ClampingPerformanceEnvelope.__qualname__ = "ClampingPerformanceEnvelope"
-    register_actuator_component(ENVELOPE_CLAMPING_SCHEMA, ClampingPerformanceEnvelope, ComponentKind.CLAMPING)
-    return ClampingPerformanceEnvelope
+    component = register_clamping_component(ENVELOPE_CLAMPING_SCHEMA)  # imports newton and its schemas
+    register_schema()
+    return component
 
 
 def _envelope_values(envelope: PerformanceEnvelope | Mapping[str, Any]) -> dict[str, float]:
@@ -144,39 +114,8 @@ def author_envelope_clamping(
             ``use_newton_actuators=True`` and one of its own explicit cfgs for those joints).
     """
     values = _envelope_values(envelope)
-    patterns = [joint_names_expr] if isinstance(joint_names_expr, str) else list(joint_names_expr)
-    try:
-        compiled = [re.compile(p) for p in patterns]
-    except (re.error, TypeError) as exc:
-        raise InputError(f"author_envelope_clamping: joint_names_expr {joint_names_expr!r}: {exc}") from None
     register_envelope_clamping()
-    from pxr import Sdf, Usd
-
-    root = stage.GetPrimAtPath(articulation_prim_path)
-    if not root.IsValid():
-        raise InputError(
-            f"author_envelope_clamping: articulation_prim_path {articulation_prim_path!r}: no such prim"
-        )
-    authored: list[str] = []
-    for prim in Usd.PrimRange(root):
-        if prim.GetTypeName() != "NewtonActuator":
-            continue
-        targets = prim.GetRelationship("newton:targets")
-        names = [str(t).rsplit("/", 1)[-1] for t in (targets.GetTargets() if targets else [])]
-        if not names or not any(c.fullmatch(names[0]) for c in compiled):
-            continue
-        prim.AddAppliedSchema(ENVELOPE_CLAMPING_SCHEMA)
-        for field, attribute in _USD_ATTRIBUTES.items():
-            prim.CreateAttribute(attribute, Sdf.ValueTypeNames.Float).Set(values[field])
-        authored.append(str(prim.GetPath()))
-    if not authored:
-        raise InputError(
-            f"author_envelope_clamping: no active NewtonActuator prim under {articulation_prim_path!r} "
-            f"targets a joint matching {patterns}; Isaac Lab authors them only with "
-            f"SimulationCfg(use_newton_actuators=True) and one of its explicit cfgs (IdealPDActuatorCfg, "
-            f"DCMotorCfg, ...) for those joints"
-        )
-    return authored
+    return apply_envelope_clamping(stage, articulation_prim_path, values, joint_names_expr)
 
 
 @functools.cache
