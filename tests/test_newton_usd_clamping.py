@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -23,7 +25,11 @@ from drive_envelope.isaaclab import author_envelope_clamping, register_envelope_
 register_envelope_clamping()
 
 CARTPOLE = Path(__file__).resolve().parents[2] / "shared" / "data" / "newton-assets" / "cartpole.usda"
-ENVELOPE = {"max_effort": 5.0, "max_actuator_velocity": 3.0, "velocity_dependent_resistance": 0.5}
+ENVELOPE: dict[str, Any] = {
+    "max_effort": 5.0,
+    "max_actuator_velocity": 3.0,
+    "velocity_dependent_resistance": 0.5,
+}
 KP, KD = 50.0, 2.0
 
 
@@ -61,7 +67,8 @@ def test_add_usd_builds_the_envelope_stage_and_steps_the_clamp() -> None:
     envelope = de.PerformanceEnvelope(**ENVELOPE)
     bound = 0
     for qd_value, target in [(0.0, 1.0), (2.0, 1.0), (-2.0, 1.0), (3.5, -1.0), (-1.0, -0.02)]:
-        state, control = model.state(), model.control()
+        state: Any = model.state()
+        control: Any = model.control()
         qd = state.joint_qd.numpy()
         qd[dof] = qd_value
         state.joint_qd = wp.array(qd, dtype=wp.float32, device="cpu")
