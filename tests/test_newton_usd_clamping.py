@@ -10,7 +10,6 @@ effort ``kp (q* - q) - kd qd`` at the joint velocity.
 from __future__ import annotations
 
 from pathlib import Path
-
 from typing import Any
 
 import numpy as np
