@@ -14,6 +14,12 @@ Implicit (PhysX applies the envelope in its solver): author it in the robot's US
 matching ``ImplicitActuatorCfg`` (:func:`author_implicit_envelopes`), or write it at run time in the
 PhysX tensor API's order (:func:`drive_model_properties`). See ``docs/isaaclab.md``.
 
+Newton actuators (Isaac Lab 3.0, ``use_newton_actuators=True``): ``PerformanceEnvelopeArticulationCfg``
+(``envelope_clamping={"group": envelope}`` beside Isaac Lab's own ``IdealPDActuatorCfg`` groups) puts
+the envelope on the ``NewtonActuator`` prims Isaac Lab authors, as the USD schema
+``DriveEnvelopeClampingAPI`` that Newton builds into a ``ClampingPerformanceEnvelope`` stage
+(:func:`register_envelope_clamping` before the first stage, :func:`author_envelope_clamping`).
+
 Importing this module does not import Isaac Lab, torch or warp; the first access to the two
 classes imports ``isaaclab.actuators``.
 """
