@@ -8,7 +8,9 @@ envelope clamp, every drive of a world solved together with the block of ``(M + 
 driven DOFs. Their numbers live in ``m.actuator_dynprm`` (the plugin's layout), per world when the
 model is put with ``batch_sizes={"actuator_dynprm": nworld}``: :func:`set_envelope` and
 :func:`set_gains` change them for one world or all. :func:`attach` drives a plugin-free model
-(e.g. one mjlab built). Importing this module loads neither Warp nor MuJoCo.
+(e.g. one mjlab built). :func:`constraint_sizes` measures the ``nconmax`` / ``njmax`` to give
+``mujoco_warp.make_data`` (its defaults are too small for a robot on the floor). Importing this
+module loads neither Warp nor MuJoCo.
 
 SI units, as in ``drive_envelope.mujoco``: efforts [N*m or N], velocities [rad/s or m/s].
 """
@@ -18,10 +20,13 @@ from __future__ import annotations
 from drive_envelope._src.adapters.mjwarp.drives import EnvelopeDrives
 from drive_envelope._src.adapters.mjwarp.model import attach, envelope_drives, put_model, spec_without_plugin
 from drive_envelope._src.adapters.mjwarp.params import get_envelope, get_gains, set_envelope, set_gains
+from drive_envelope._src.adapters.mjwarp.sizing import ConstraintSizes, constraint_sizes
 
 __all__ = [
+    "ConstraintSizes",
     "EnvelopeDrives",
     "attach",
+    "constraint_sizes",
     "envelope_drives",
     "get_envelope",
     "get_gains",
