@@ -30,6 +30,7 @@ __all__ = [
     "clamp_effort_implicit_func",
     "effort_limit_func",
     "implicit_drive_impulse",
+    "implicit_drive_params",
 ]
 
 # no fused multiply-add: dev = x0*r - v0 must round twice, as in PhysX's CPU build and NumPy (NVRTC
@@ -393,6 +394,50 @@ def implicit_drive_impulse(
     if response > wp.float64(0.0):
         return (wp.float64(1.0) / (wp.float64(1.0) + a * response)) * rhs
     return wp.float64(0.0)
+
+
+@wp.func
+def implicit_drive_params(
+    stiffness: wp.float64,
+    damping: wp.float64,
+    position_error: wp.float64,
+    target_velocity: wp.float64,
+    response: wp.float64,
+    span: wp.float64,
+    dt: wp.float64,
+    acceleration: int,
+    tgs: int,
+):
+    """PhysX's ``computeImplicitDriveParams`` as the coefficients of ``computeDriveImpulse`` [SI].
+
+    Over ``span`` (the step, or a TGS substep of the step ``dt``): ``a = span*(span*k + c)``,
+    ``x = 1/(1 + a*r)`` (force drive) or ``1/(1 + a)`` with the gains times ``scale = 1/r``
+    (acceleration drive), ``bias = k*x*scale*span``. Returns ``(constant, bias, velocity,
+    accumulated, elapsed)`` such that the drive's request at joint velocity ``v`` with ``J``
+    already applied, ``moved`` travelled and ``t`` elapsed in the step is
+    ``J*accumulated + v*velocity + constant - moved*bias + t*elapsed`` [N*m*s or N*s], where
+    ``constant = x*span*c*vt*scale + bias*(error - (dt - span)*vt)``, ``velocity = -x*a*scale``,
+    ``accumulated = 1`` (TGS) or ``1 - x`` (PGS) and ``elapsed = bias*vt`` (TGS) or 0.
+    """
+    zero = wp.float64(0.0)
+    one = wp.float64(1.0)
+    a = span * (span * stiffness + damping)
+    b = span * (damping * target_velocity)
+    initial = position_error - (dt - span) * target_velocity
+    x = zero
+    scale = one
+    if acceleration != 0:
+        x = one / (one + a)
+        scale = one / response
+    elif response > zero:
+        x = one / (one + a * response)
+    bias = stiffness * x * scale * span
+    accumulated = one - x
+    elapsed = zero
+    if tgs != 0:
+        accumulated = one
+        elapsed = bias * target_velocity
+    return x * b * scale + bias * initial, bias, -x * a * scale, accumulated, elapsed
 
 
 @wp.kernel(enable_backward=False)

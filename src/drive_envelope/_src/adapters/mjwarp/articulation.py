@@ -21,7 +21,7 @@ integrator).
 import warp as wp  # noqa: TID253 (imported only by kernels.py, itself imported lazily)
 
 from drive_envelope._src.adapters.mjwarp.solve import Layout, _finite
-from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func
+from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_params
 
 wp.set_module_options({"fuse_fp": False})
 
@@ -107,7 +107,6 @@ def articulation(
     """PhysX's PGS (kind 1) or TGS (kind 2) over the drives; writes each effort, returns the sweeps."""
     n = lay.n
     zero = wp.float64(0.0)
-    one = wp.float64(1.0)
     tgs = kind == TGS
     step = h
     if tgs:
@@ -119,26 +118,22 @@ def articulation(
             # computeImplicitDriveParams with the row's response and the span the spring integrates over
             p = lay.prm + 6 * r
             d = lay.desc + 5 * r
-            stiffness = work[p + 4, w]
-            damping = work[p + 5, w]
-            response = work[lay.a + r * n + r, w]
-            tvel = work[lay.tvel + r, w]
-            a = step * (step * stiffness + damping)
-            b = step * (damping * tvel)
-            initial = work[lay.err + r, w] - (h - step) * tvel
-            x = zero
-            scale = one
-            if accel[r] != 0:
-                x = one / (one + a)
-                scale = one / response
-            elif response > zero:
-                x = one / (one + a * response)
-            bias = stiffness * x * scale * step
-            work[d, w] = x * b * scale + bias * initial
+            constant, bias, per_velocity, per_accumulated, per_elapsed = implicit_drive_params(
+                work[p + 4, w],
+                work[p + 5, w],
+                work[lay.err + r, w],
+                work[lay.tvel + r, w],
+                work[lay.a + r * n + r, w],
+                step,
+                h,
+                accel[r],
+                wp.where(tgs, 1, 0),
+            )
+            work[d, w] = constant
             work[d + 1, w] = bias
-            work[d + 2, w] = -x * a * scale
-            work[d + 3, w] = wp.where(tgs, one, one - x)
-            work[d + 4, w] = wp.where(tgs, bias * tvel, zero)
+            work[d + 2, w] = per_velocity
+            work[d + 3, w] = per_accumulated
+            work[d + 4, w] = per_elapsed
     for r in range(n):
         work[lay.v + r, w] = work[lay.vfree + r, w]
     for r in range(n):

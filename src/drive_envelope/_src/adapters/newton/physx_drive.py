@@ -35,7 +35,7 @@ from typing import Any
 
 import warp as wp  # noqa: TID253  (a kernel module, imported lazily, as warp_funcs)
 
-from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func
+from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_params
 
 __all__ = ["PARAMS", "launch_drive", "shift_positions"]
 
@@ -96,34 +96,18 @@ def _drive_request(
 ):
     """PhysX's computeDriveImpulse of computeImplicitDriveParams' law [N*m*s or N*s].
 
-    ``a = step*(step*k + c)``, ``x = 1/(1 + a*r)`` (force) or ``1/(1 + a)`` with the gains times
-    ``1/r`` (acceleration); the request is ``accumulated*(1 or 1 - x) - v*x*a*scale + x*step*c*vt*
-    scale + k*x*scale*step*(error - (dt - step)*vt - moved + elapsed*vt*[tgs])``.
+    The coefficients are :func:`~drive_envelope._src.kernels.warp_funcs.implicit_drive_params`,
+    the one Warp form of the law (MJWarp's articulation iteration uses it too).
     """
-    one = wp.float64(1.0)
-    zero = wp.float64(0.0)
-    a = step * (step * stiffness + damping)
-    x = zero
-    scale = one
-    if acceleration != 0:
-        x = one / (one + a)
-        scale = one / response
-    elif response > zero:
-        x = one / (one + a * response)
-    bias_coefficient = stiffness * x * scale * step
-    initial_bias = error - (dt - step) * target_velocity
-    constant = x * step * damping * target_velocity * scale + bias_coefficient * initial_bias
-    multiplier = one - x
-    target_pos_bias = zero
-    if tgs != 0:
-        multiplier = one
-        target_pos_bias = bias_coefficient * target_velocity
+    constant, bias, per_velocity, per_accumulated, per_elapsed = implicit_drive_params(
+        stiffness, damping, error, target_velocity, response, step, dt, acceleration, tgs
+    )
     return (
-        accumulated * multiplier
-        - velocity * x * a * scale
+        accumulated * per_accumulated
+        + velocity * per_velocity
         + constant
-        - moved * bias_coefficient
-        + elapsed * target_pos_bias
+        - moved * bias
+        + elapsed * per_elapsed
     )
 
 
