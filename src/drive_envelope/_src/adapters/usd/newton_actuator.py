@@ -40,11 +40,13 @@ def register_schema() -> None:
     """
     from pxr import Plug, Usd
 
-    # Newton's own schemas (NewtonPDControlAPI ...) must be in before the query below builds the registry
-    try:
-        import newton_usd_schemas  # noqa: F401
-    except ImportError:
-        pass
+    # Newton's and PhysX's schemas must be in before the query below builds the registry (once per
+    # process): a registry built here without PhysX's would make every envelope read as absent
+    for module in ("newton_usd_schemas", "physx_usd_schemas"):
+        try:
+            __import__(module)
+        except ImportError:
+            pass
     Plug.Registry().RegisterPlugins([str(SCHEMA_DIR)])
     if Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(ENVELOPE_CLAMPING_SCHEMA) is None:
         raise InputError(

@@ -21,6 +21,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from drive_envelope._src.adapters.usd.newton_actuator import SCHEMA_DIR
 from drive_envelope._src.adapters.usd.scale import StageUnits
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_text
@@ -69,11 +70,13 @@ def register_schemas(*, strict: bool = True) -> None:
     """
     try:
         import physx_usd_schemas  # noqa: F401 - registers the schema plugins on import
-        from pxr import Usd
+        from pxr import Plug, Usd
     except ImportError as exc:
         raise InputError(
             f"USD support needs the 'usd' extra (pip install 'drive-envelope[usd]'): missing {exc.name!r}"
         ) from None
+    # our own codeless schema (the Newton-actuator clamping stage) joins before the registry is built
+    Plug.Registry().RegisterPlugins([str(SCHEMA_DIR)])
     if strict and Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(_ENVELOPE_API) is None:
         raise InputError(
             f"USD does not know {_ENVELOPE_API}: its schema registry was built before the PhysX schemas "
