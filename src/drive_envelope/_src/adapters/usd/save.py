@@ -228,8 +228,11 @@ def _rebased_root(root: Sdf.Layer, target: Path) -> Sdf.Layer:
 
     copy = Sdf.Layer.CreateAnonymous(target.suffix)
     copy.TransferContent(root)
-    # a symlinked output lives in another folder than the name the user opens it by: absolute paths
-    folder = None if target.is_symlink() else Path(os.path.abspath(target)).parent
+    # absolute paths where no folder anchors the file: a symlinked output lives in another folder than
+    # the name the user opens it by, and a device or FIFO gets a stream (built, and checked, in the
+    # system's temporary folder, then read wherever its reader puts it)
+    streamed = target.exists() and not target.is_file()
+    folder = None if target.is_symlink() or streamed else Path(os.path.abspath(target)).parent
     sublayers = set(root.subLayerPaths)
 
     def rebase(path: str) -> str:
