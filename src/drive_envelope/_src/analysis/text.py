@@ -105,8 +105,9 @@ def format_fit(result: FitResult) -> str:
     rows = []
     for p in result.parameters:
         interval = "-" if p.interval is None else f"[{p.interval[0]:.6g}, {p.interval[1]:.6g}]"
-        if p.interval is not None and p.interval[0] == p.interval[1] and p.std:
-            # most resamples agree exactly; the std comes from the few (under 5 %) that do not
+        if p.interval is not None and f"{p.interval[0]:.6g}" == f"{p.interval[1]:.6g}" and p.std:
+            # the middle 95 % of resamples agree to the digits shown; the std comes from the few
+            # (under 5 %) that do not, so a zero-width interval beside it would read as a bug
             interval = f"{p.interval[0]:.6g} (>= 95 % of resamples; std from the rest)"
         rows.append(
             [
