@@ -107,6 +107,8 @@ def test_usd_snippet_in_degrees(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert "PhysxDrivePerformanceEnvelopeAPI:angular" in out
     line = next(x for x in out.splitlines() if "maxActuatorVelocity" in x)
     assert float(line.split("=")[1].split("#")[0]) == pytest.approx(360 * 6.0)  # 360 rpm = 2160 deg/s
+    # USD's float holds float32: its shortest text, not float64 noise (was 2159.9999999999995)
+    assert "maxActuatorVelocity = 2160.0  # deg/s" in line
 
 
 @pytest.mark.usd
