@@ -155,21 +155,16 @@ def _physx_drive_kernel(
     moved = zero
     if tgs == 0:
         v = v + r * load * dt
-        for _it in range(iterations):
+        # the position sweeps, then at least one velocity sweep (PhysX's PGS): the same sweep
+        for sweep in range(iterations + wp.max(1, velocity_iterations)):
             if active != 0:
                 request = _drive_request(x, v, zero, zero, stiffness, damping, error, vt, r, dt, dt,
                                          acceleration, 0)  # fmt: skip
                 delta = _clamp_total(v, x, request, effort_in * dt, r, params, i, limited, dt) - x
                 x = x + delta
                 v = v + r * delta
-        moved = v * dt  # PGS moves the joint with the position sweeps' velocity
-        for _it in range(wp.max(1, velocity_iterations)):
-            if active != 0:
-                request = _drive_request(x, v, zero, zero, stiffness, damping, error, vt, r, dt, dt,
-                                         acceleration, 0)  # fmt: skip
-                delta = _clamp_total(v, x, request, effort_in * dt, r, params, i, limited, dt) - x
-                x = x + delta
-                v = v + r * delta
+            if sweep == iterations - 1:
+                moved = v * dt  # PGS moves the joint with the position sweeps' velocity
     else:
         h = dt / wp.float64(iterations)
         elapsed = zero
