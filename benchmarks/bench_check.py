@@ -6,6 +6,8 @@ velocity, effort) in a temporary directory, then times, interleaved and each in 
 
 * ``read``: ``pyarrow.csv.read_csv`` of the whole file (multi-threaded), the baseline;
 * ``check``: ``drive_envelope.analysis.check_log`` streaming the file in chunks;
+* ``check-csv-python``: the same check through the standard library's CSV engine
+  (``engine="python"``), the measurement that keeps pyarrow's CSV engine in the one log reader;
 * the same two for a Parquet copy (``pyarrow.parquet.read_table`` vs ``check_log``);
 * ``check-joints``: ``check_log`` on a long-format copy whose rows cycle through ``--joints``
   distinct joint names (default 1000, the most a check accepts): memory must stay bounded, about
@@ -38,6 +40,7 @@ _CHECK = (
 _TASKS = {
     "read-csv": ("import pyarrow.csv as c", "c.read_csv({path!r})"),
     "check-csv": _CHECK,
+    "check-csv-python": (_CHECK[0], _CHECK[1].replace("{path!r})", "{path!r}, engine='python')")),
     "read-parquet": ("import pyarrow.parquet as q", "q.read_table({path!r})"),
     "check-parquet": _CHECK,
     "check-joints": (_CHECK[0], "assert sum(j.samples for j in check_log(env, {path!r}).joints) == {rows}"),
@@ -137,10 +140,12 @@ def main() -> None:
         for task, runs in results.items()
     }
     for task, (seconds, rss) in medians.items():
-        print(f"{task:14s} median {seconds:7.3f} s   peak RSS {rss:7.0f} MiB   ({args.repeats} runs)")
+        print(f"{task:16s} median {seconds:7.3f} s   peak RSS {rss:7.0f} MiB   ({args.repeats} runs)")
     for kind in ("csv", "parquet"):
         ratio = medians[f"check-{kind}"][0] / medians[f"read-{kind}"][0]
         print(f"ratio check/read ({kind}): {ratio:.2f}  (goal <= 5)")
+    engines = medians["check-csv-python"][0] / medians["check-csv"][0]
+    print(f"ratio check python/pyarrow CSV engine: {engines:.2f}  (pyarrow stays while > 1.5)")
 
 
 if __name__ == "__main__":
