@@ -25,7 +25,7 @@ from drive_envelope._src.analysis.log_arrow import arrow_joint
 from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
 from drive_envelope._src.errors import InputError
 
-__all__ = ["FIELD_LIMIT", "iter_csv_arrow", "iter_csv_python"]
+__all__ = ["FIELD_LIMIT", "csv_header", "csv_rows", "iter_csv_arrow", "iter_csv_python"]
 
 FIELD_LIMIT = csv.field_size_limit()
 """Longest field the standard library reads [characters] (131072): a longer one is an error."""
@@ -207,6 +207,23 @@ def _data_rows(path: Path, skip: int, delimiter: str) -> Iterator[tuple[list[str
         for fields in reader:
             if fields:
                 yield fields, skip + 1 + reader.line_num
+
+
+def csv_rows(path: Path, label: str) -> tuple[list[str], list[list[str]]]:
+    """Header names and every data row's fields of a CSV read whole (identify's bench logs).
+
+    The header, comments, delimiter and byte-order mark follow :func:`csv_header`, so a bench log
+    reads as ``check`` reads a log; blank rows are skipped.
+
+    Raises:
+        InputError: an empty, damaged or truncated file, naming it.
+    """
+    skip, header, delimiter = csv_header(path, label)
+    try:
+        rows = [fields for fields, _ in _data_rows(path, skip, delimiter)]
+    except _READ_ERRORS as exc:
+        raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+    return header, rows
 
 
 def _line_of(path: Path, skip: int, delimiter: str, row: int) -> int:

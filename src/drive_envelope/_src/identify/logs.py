@@ -25,13 +25,9 @@ other sidecar keys are ignored.
 
 from __future__ import annotations
 
-import csv
-import gzip
-import io
 import json
 import math
 import os
-import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
+from drive_envelope._src.analysis.log_csv import csv_rows
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_text
 from drive_envelope._src.io.paths import input_file
@@ -229,26 +226,9 @@ def _read_bag(file: Path, label: str, options: BagOptions, joint: str | None) ->
     return columns
 
 
-def _open_text(file: Path) -> Any:
-    if file.suffix.lower() == ".gz":
-        return io.TextIOWrapper(gzip.open(file, "rb"), encoding="utf-8-sig", newline="")
-    return open(file, encoding="utf-8-sig", newline="")  # -sig: skip a byte-order mark
-
-
 def _read_csv(file: Path, label: str) -> dict[str, FloatArray]:
-    try:
-        with _open_text(file) as handle:
-            lines = [line for line in handle if line.strip() and not line.lstrip().startswith("#")]
-    except (OSError, EOFError, UnicodeDecodeError, zlib.error) as exc:
-        raise InputError(f"{label}: cannot read: {' '.join(str(exc).split())}") from None
-    if not lines:
-        raise InputError(f"{label}: empty file (expected a header line naming the columns, then rows)")
-    delimiter = max((",", ";", "\t"), key=lines[0].count)
-    try:
-        header, *rows = [fields for fields in csv.reader(lines, delimiter=delimiter) if fields]
-    except csv.Error as exc:
-        raise InputError(f"{label}: cannot read as CSV: {' '.join(str(exc).split())}") from None
-    plan, scales = _plan([name.strip() for name in header], label)
+    header, rows = csv_rows(file, label)  # check's CSV rules: comments, delimiter, BOM, .gz
+    plan, scales = _plan(header, label)
     width = max(plan.values()) + 1
     for row, fields in enumerate(rows, start=1):
         if len(fields) < width:
