@@ -56,3 +56,28 @@ def test_an_empty_bench_log_is_refused_as_check_refuses_it(tmp_path: Path) -> No
     assert str(bench.value) == (
         f"{path}: empty file (expected a header line naming the columns, then rows of numbers)"
     )
+
+
+def test_a_parquet_bench_log_gives_the_samples_check_reads(tmp_path: Path) -> None:
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    columns = {name: pa.array([float(row[i]) for row in ROWS]) for i, name in enumerate(HEADER)}
+    columns["torque_enable"] = pa.array([True, True, False])
+    path = tmp_path / "log.parquet"
+    pq.write_table(pa.table(columns), path)
+    bench = read_bench_log(path)
+    log = read_log(path, LogColumns(joint=None))
+    np.testing.assert_allclose(bench.velocity, [600 * math.pi / 30, 300 * math.pi / 30, 0.0], rtol=1e-15)
+    assert np.array_equal(bench.velocity, log.velocity) and np.array_equal(bench.effort, log.effort)
+    assert bench.enabled.tolist() == [True, True, False]
+
+
+def test_a_parquet_text_column_is_refused_as_check_refuses_it(tmp_path: Path) -> None:
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    path = tmp_path / "text.parquet"
+    table = {"time": [0.0, 0.01, 0.02], "position": ["a", "b", "c"], "target_position": [1.0, 1.0, 1.0]}
+    pq.write_table(pa.table(table), path)
+    with pytest.raises(InputError) as caught:
+        read_bench_log(path)
+    assert str(caught.value) == f"{path}: column 'position' has type string; expected numbers"

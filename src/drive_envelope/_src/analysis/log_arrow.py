@@ -18,7 +18,7 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
 from drive_envelope._src.errors import InputError
 
-__all__ = ["arrow_joint", "iter_parquet", "iter_table"]
+__all__ = ["arrow_joint", "arrow_numeric", "iter_parquet", "iter_table"]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
@@ -28,7 +28,8 @@ def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
 
 
-def _arrow_numeric(column: Any, name: str, label: str) -> FloatArray:
+def arrow_numeric(column: Any, name: str, label: str) -> FloatArray:
+    """A pyarrow column of numbers (float, integer, decimal) as float64, as written (no unit applied)."""
     import pyarrow as pa
 
     kind = column.type
@@ -80,7 +81,7 @@ def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -
         try:
             for batch in handle.iter_batches(batch_size=chunk_rows, columns=list(names.values())):
                 arrays = {
-                    role: _arrow_numeric(batch.column(names[role]), plan.name(role), label)
+                    role: arrow_numeric(batch.column(names[role]), plan.name(role), label)
                     for role in plan.numeric
                 }
                 joint = arrow_joint(batch.column(names["joint"]), codes, plan, row) if plan.joint else None
@@ -144,7 +145,7 @@ def iter_table(table: Any, columns: LogColumns, chunk_rows: int, label: str) -> 
 
 def _table_numeric(values: Any, name: str, label: str) -> FloatArray:
     if type(values).__module__.startswith("pyarrow"):
-        return _arrow_numeric(values, name, label)
+        return arrow_numeric(values, name, label)
     try:
         return np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_arrow import arrow_numeric
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.analysis.log_csv import csv_rows
 from drive_envelope._src.errors import InputError
@@ -281,16 +282,12 @@ def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
     columns = {}
     for column, index in plan.items():
         data = table.column(index)
-        if not (
-            pa.types.is_floating(data.type)
-            or pa.types.is_integer(data.type)
-            or pa.types.is_boolean(data.type)
-        ):
-            raise InputError(f"{label}: column {column!r} has type {data.type}; expected numbers")
+        if pa.types.is_boolean(data.type):  # torque_enable written as True/False
+            data = data.cast(pa.int8())
+        values = arrow_numeric(data, column, label)  # check's type rule for Parquet columns
         if data.null_count:
             row = int(np.flatnonzero(data.is_null().to_numpy(zero_copy_only=False))[0]) + 1
             raise InputError(f"{label}: row {row}, column {column!r}: got an empty cell; expected a number")
-        values = np.asarray(data.to_numpy(zero_copy_only=False), dtype=np.float64)
         _check_finite(values, column, label)
         columns[column] = values * scales.get(column, 1.0)
     return columns
