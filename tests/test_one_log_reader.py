@@ -36,11 +36,11 @@ def test_a_bench_log_gives_the_samples_check_reads(tmp_path: Path, delimiter: st
     path = _write(tmp_path / name, delimiter)
     bench = read_bench_log(path)
     log = read_log(path, LogColumns(joint=None))
+    assert bench.velocity is not None and bench.effort is not None and log.time is not None
     np.testing.assert_allclose(bench.time, [0.0, 0.01, 0.02], rtol=1e-15)
     np.testing.assert_allclose(bench.position, [0.0, math.pi / 4, math.pi / 2], rtol=1e-15)
     np.testing.assert_allclose(bench.velocity, [600 * math.pi / 30, 300 * math.pi / 30, 0.0], rtol=1e-15)
     np.testing.assert_allclose(bench.effort, [0.25, 0.125, 0.0], rtol=1e-15)
-    assert log.time is not None
     assert np.array_equal(bench.time, log.time)
     assert np.array_equal(bench.velocity, log.velocity) and np.array_equal(bench.effort, log.effort)
 
@@ -67,6 +67,7 @@ def test_a_parquet_bench_log_gives_the_samples_check_reads(tmp_path: Path) -> No
     pq.write_table(pa.table(columns), path)
     bench = read_bench_log(path)
     log = read_log(path, LogColumns(joint=None))
+    assert bench.velocity is not None and bench.effort is not None
     np.testing.assert_allclose(bench.velocity, [600 * math.pi / 30, 300 * math.pi / 30, 0.0], rtol=1e-15)
     assert np.array_equal(bench.velocity, log.velocity) and np.array_equal(bench.effort, log.effort)
     assert bench.enabled.tolist() == [True, True, False]
