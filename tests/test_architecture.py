@@ -21,6 +21,7 @@ RANKS: dict[str, int] = {
     "version": 0,
     "units": 0,
     "values": 0,
+    "validation": 0,
     "format": 0,
     "params": 0,
     "envelope": 1,

@@ -8,31 +8,17 @@ Every place that takes a value from a file, a dict, a config or a command-line f
 
 from __future__ import annotations
 
-import difflib
 import math
-from collections.abc import Iterable
 
 from drive_envelope._src.errors import UnitsError
 from drive_envelope._src.params.table import parameter
 from drive_envelope._src.units import to_si
+from drive_envelope._src.validation import nearest_key  # moved; kept here for its importers
 
 __all__ = ["INFINITY_WORDS", "nearest_key", "read_envelope_value", "read_joint_quantity", "read_quantity"]
 
 INFINITY_WORDS = ("inf", "+inf", "infinity", "+infinity")
 """Spellings of an unbounded value (case-insensitive), e.g. ``max_actuator_velocity = "inf"``."""
-
-
-def nearest_key(key: str, valid: Iterable[str], *, cutoff: float = 0.5) -> str:
-    """Return ``" (did you mean 'x'?)"`` for the closest valid key, or ``""`` when none is close.
-
-    Args:
-        key: The key as written.
-        valid: The keys that exist there.
-        cutoff: Similarity in [0, 1] a suggestion needs (difflib's ratio); short names such as
-            section names need a higher one, or every short word "looks like" one of them.
-    """
-    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=cutoff)
-    return f" (did you mean {match[0]!r}?)" if match else ""
 
 
 def read_quantity(value: object, unit: str, where: str) -> float:

@@ -27,7 +27,7 @@ from drive_envelope._src.datasheet.spec import (
 from drive_envelope._src.errors import InputError, UnitsError
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.units import converts_to, describe_unit, to_si
-from drive_envelope._src.values import nearest_key
+from drive_envelope._src.validation import check_keys, nearest_key
 
 __all__ = [
     "DATASHEET_SECTIONS",
@@ -324,12 +324,8 @@ def _read_section(table: object, section: str, reading: _Reading) -> dict[str, A
     spec = SECTION_KEYS[section]
     aliases = KEY_ALIASES.get(section, {})
     written: dict[str, str] = {}  # key -> the name it was written under
+    check_keys(table, spec, source, section, aliases=aliases)
     for key in table:
-        if key not in spec and key not in aliases:
-            raise InputError(
-                f"{source}: unknown key {f'{section}.{key}'!r}{nearest_key(str(key), [*spec, *aliases])}; "
-                f"valid keys in [{section}]: {', '.join(spec)}"
-            )
         canonical = aliases.get(str(key), str(key))
         if canonical in written:
             raise InputError(

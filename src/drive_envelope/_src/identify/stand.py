@@ -35,7 +35,8 @@ from typing import Any
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.scenario.spec import Scenario, scenario_from_mapping
-from drive_envelope._src.values import nearest_key, read_quantity
+from drive_envelope._src.validation import check_keys
+from drive_envelope._src.values import read_quantity
 
 __all__ = ["IdentifyStand", "StandWarning", "read_stand"]
 
@@ -118,12 +119,7 @@ _SERVO_KEYS = ("duty_per_rad", "duty_effort")
 
 
 def _duty(table: Mapping[str, Any], source: str) -> float | None:
-    for key in table:
-        if key not in _SERVO_KEYS:
-            raise InputError(
-                f"{source}: unknown key 'servo.{key}'{nearest_key(str(key), _SERVO_KEYS)}; "
-                f"valid keys in [servo]: {', '.join(_SERVO_KEYS)}"
-            )
+    check_keys(table, _SERVO_KEYS, source, "servo")
     if "duty_per_rad" not in table:
         return None
     value = read_quantity(table["duty_per_rad"], "1/rad", f"{source}: key 'servo.duty_per_rad'")
@@ -148,12 +144,8 @@ def _bounds(
     table: Mapping[str, Any], units: Mapping[str, str], joint: str, source: str
 ) -> dict[str, tuple[float, float]]:
     bounds = {}
+    check_keys(table, tuple(units), source, "bounds")
     for key, value in table.items():
-        if key not in units:
-            raise InputError(
-                f"{source}: unknown key 'bounds.{key}'{nearest_key(str(key), tuple(units))}; "
-                f"valid keys in [bounds]: {', '.join(units)}"
-            )
         where = f"{source}: key 'bounds.{key}'"
         if not isinstance(value, (list, tuple)) or len(value) != 2:
             raise InputError(f"{where}: expected [low, high], got {value!r}")

@@ -11,7 +11,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.values import nearest_key, read_quantity
+from drive_envelope._src.validation import check_keys
+from drive_envelope._src.values import read_quantity
 
 __all__ = [
     "MAX_ITERATIONS",
@@ -57,17 +58,6 @@ def table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
     if not isinstance(value, Mapping):
         raise InputError(f"{source}: key {name!r}: expected a table [{name}], got {value!r}")
     return dict(value)
-
-
-def check_keys(data: Mapping[str, Any], valid: tuple[str, ...], source: str, section: str) -> None:
-    """Refuse a key that is not in ``valid``, suggesting the nearest one."""
-    prefix = f"{section}." if section else ""
-    for key in data:
-        if key not in valid:
-            raise InputError(
-                f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), valid)}; "
-                f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
-            )
 
 
 def read_text(data: Mapping[str, Any], key: str, source: str) -> str:

@@ -52,7 +52,7 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.values import nearest_key
+from drive_envelope._src.validation import nearest_key
 
 __all__ = [
     "JointMap",

@@ -1,0 +1,59 @@
+"""The one check of keys a user wrote: an unknown key is refused with the nearest valid one.
+
+Every file, table and override that takes named keys (datasheets, scenarios, envelope tables,
+bench-stand files, joint maps) refuses an unknown key here, so the message reads the same
+everywhere: ``"file: unknown key 'servo.dutty'" (did you mean 'duty_per_rad'?); valid keys in
+[servo]: ..."``.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Collection, Iterable
+
+from drive_envelope._src.errors import InputError
+
+__all__ = ["check_keys", "nearest_key"]
+
+
+def nearest_key(key: str, valid: Iterable[str], *, cutoff: float = 0.5) -> str:
+    """Return ``" (did you mean 'x'?)"`` for the closest valid key, or ``""`` when none is close.
+
+    Args:
+        key: The key as written.
+        valid: The keys that exist there.
+        cutoff: Similarity in [0, 1] a suggestion needs (difflib's ratio); short names such as
+            section names need a higher one, or every short word "looks like" one of them.
+    """
+    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=cutoff)
+    return f" (did you mean {match[0]!r}?)" if match else ""
+
+
+def check_keys(
+    given: Iterable[object],
+    valid: Collection[str],
+    source: str,
+    section: str = "",
+    *,
+    aliases: Iterable[str] = (),
+) -> None:
+    """Refuse a key that is not in ``valid`` (or ``aliases``), suggesting the nearest one.
+
+    Args:
+        given: The keys as written (a mapping's keys).
+        valid: The keys that exist there, listed in the message.
+        source: The file (or argument) the keys come from; it starts the message.
+        section: The table the keys sit in (``"servo"``), or ``""`` at the top level.
+        aliases: Other accepted names: suggested, not listed.
+
+    Raises:
+        InputError: ``"source: unknown key 'section.key' (did you mean ...); valid keys in [section]: ..."``.
+    """
+    accepted = [*valid, *aliases]
+    prefix = f"{section}." if section else ""
+    for key in given:
+        if key not in accepted:
+            raise InputError(
+                f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), accepted)}; "
+                f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
+            )
