@@ -55,10 +55,9 @@ ClampingPerformanceEnvelope: Any
 def __getattr__(name: str) -> Any:
     """Define ``ClampingPerformanceEnvelope`` on first access (this imports Newton and Warp)."""
     if name == "ClampingPerformanceEnvelope":
-        from drive_envelope._src.adapters.newton.clamp import build
-
         try:
-            return build()
+            from drive_envelope._src.adapters.newton.clamp_stage import ClampingPerformanceEnvelope
         except ModuleNotFoundError as exc:
             raise ImportError(f"{name} needs Newton: pip install 'drive-envelope[newton]'") from exc
+        return ClampingPerformanceEnvelope
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -117,7 +117,7 @@ def _build(scenario: Scenario, *, actuator: bool) -> Any:
     import warp as wp
     from newton.actuators import DrivePD
 
-    from drive_envelope._src.adapters.newton.clamp import build
+    from drive_envelope._src.adapters.newton.clamp_stage import ClampingPerformanceEnvelope
 
     pendulum = scenario.pendulum
     gravity = scenario.simulation.gravity if pendulum is not None else 0.0
@@ -137,7 +137,8 @@ def _build(scenario: Scenario, *, actuator: bool) -> Any:
     builder.add_articulation([joint])
     if actuator:
         kp, kd = _gains(scenario)
-        builder.add_actuator(DrivePD, index=0, kp=kp, kd=kd, clamping=_clamping(scenario, build()))
+        clamping = _clamping(scenario, ClampingPerformanceEnvelope)
+        builder.add_actuator(DrivePD, index=0, kp=kp, kd=kd, clamping=clamping)
     return builder.finalize(device="cpu")
 
 

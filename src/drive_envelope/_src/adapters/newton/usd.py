@@ -180,7 +180,7 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
     from newton import JointTargetMode
     from newton.actuators import DrivePD
 
-    from drive_envelope._src.adapters.newton.clamp import build
+    from drive_envelope._src.adapters.newton.clamp_stage import ClampingPerformanceEnvelope
     from drive_envelope._src.adapters.usd.authoring import list_drives
 
     _check_builder(builder)
@@ -188,7 +188,7 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
     name = _name(source)
     stage = _open(source)
     _check_units(stage, name)
-    clamp_class = build()
+    clamp_class = ClampingPerformanceEnvelope
     joints = _joints_by_label(builder)
     actuated = _actuated_dofs(builder)
     added = []

@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 from typing import Any
 
-from drive_envelope._src.adapters.newton.clamp import build, resolve_envelope_arguments
+from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
 
 __all__ = ["register_clamping_component"]
@@ -30,7 +30,7 @@ def register_clamping_component(schema_name: str) -> type:
     """
     from newton.actuators import ComponentKind, register_actuator_component
 
-    base: Any = build()
+    from drive_envelope._src.adapters.newton.clamp_stage import ClampingPerformanceEnvelope as base
 
     class ClampingPerformanceEnvelope(base):  # type: ignore[misc,valid-type]
         """``ClampingPerformanceEnvelope`` as built from a USD API schema's attributes."""
