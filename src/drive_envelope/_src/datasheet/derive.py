@@ -78,7 +78,7 @@ def derive(
     if gradient_method is not None:
         if gradient_method not in GRADIENT_METHODS:
             raise InputError(
-                f"gradient method: expected auto, resistance, nominal or datasheet, got {gradient_method!r}"
+                f"gradient method: expected one of {', '.join(GRADIENT_METHODS)}, got {gradient_method!r}"
             )
         method, explicit = gradient_method, True
         ctx.provenance["motor.gradient_method"] = "user"

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from drive_envelope._src.datasheet.spec import (
+    GRADIENT_METHODS,
     ControllerSpec,
     Datasheet,
     GearboxSpec,
@@ -40,7 +41,6 @@ __all__ = [
 
 DATASHEET_SECTIONS = ("motor", "gear", "controller", "losses", "output", "screw")
 _TOP_KEYS = ("name", "joint", "description", "sources", *DATASHEET_SECTIONS)
-_GRADIENT_METHODS = ("auto", "resistance", "nominal", "datasheet")
 
 # SI unit of each kind of quantity, for rotary motor data, linear motor data and the joint side.
 _ROTARY = {
@@ -444,9 +444,9 @@ def _check_rule(value: float, raw: object, rule: str, where: str) -> None:
 
 
 def _read_enum(raw: object, where: str) -> str:
-    if raw not in _GRADIENT_METHODS:
-        hint = nearest_key(str(raw), _GRADIENT_METHODS)
-        raise InputError(f"{where}: expected one of {', '.join(_GRADIENT_METHODS)}, got {raw!r}{hint}")
+    if raw not in GRADIENT_METHODS:
+        hint = nearest_key(str(raw), GRADIENT_METHODS)
+        raise InputError(f"{where}: expected one of {', '.join(GRADIENT_METHODS)}, got {raw!r}{hint}")
     return str(raw)
 
 

@@ -17,14 +17,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal, get_args
 
-from drive_envelope._src.envelope.model import JointType
+if TYPE_CHECKING:  # a string annotation only: the CLI reads GRADIENT_METHODS without loading numpy
+    from drive_envelope._src.envelope.model import JointType
 
 __all__ = [
     "ControllerSpec",
     "Datasheet",
     "GearboxSpec",
+    "GRADIENT_METHODS",
     "GradientMethod",
     "LossesSpec",
     "MotorDatasheet",
@@ -35,6 +37,8 @@ __all__ = [
 ]
 
 GradientMethod = Literal["auto", "resistance", "nominal", "datasheet"]
+GRADIENT_METHODS: tuple[GradientMethod, ...] = get_args(GradientMethod)
+"""The speed-torque gradient methods, for the file's ``motor.gradient_method`` and ``--gradient-method``."""
 """How the motor's speed-torque gradient is formed when the voltage limit binds."""
 
 ParamSource = Literal["datasheet", "derived", "default", "user"]

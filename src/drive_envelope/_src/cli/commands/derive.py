@@ -11,6 +11,8 @@ from drive_envelope._src.cli.common import add_format_argument, add_output_argum
 
 def register(subparsers: Any) -> None:
     """Add the ``derive`` command."""
+    from drive_envelope._src.datasheet.spec import GRADIENT_METHODS  # numpy-free: --help stays light
+
     parser = subparsers.add_parser(
         "derive",
         help="derive the envelope from motor, gear and controller datasheets",
@@ -38,7 +40,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--gradient-method",
-        choices=("auto", "datasheet", "resistance", "nominal"),
+        choices=GRADIENT_METHODS,
         help="motor speed-torque gradient when the voltage limit binds (default: the file's, else auto)",
     )
     parser.add_argument(
