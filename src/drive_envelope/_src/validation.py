@@ -13,7 +13,7 @@ from collections.abc import Collection, Iterable
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["check_keys", "nearest_key"]
+__all__ = ["check_keys", "keyed_error", "nearest_key"]
 
 
 def nearest_key(key: str, valid: Iterable[str], *, cutoff: float = 0.5) -> str:
@@ -57,3 +57,12 @@ def check_keys(
                 f"{source}: unknown key {prefix + str(key)!r}{nearest_key(str(key), accepted)}; "
                 f"valid keys{' in [' + section + ']' if section else ''}: {', '.join(valid)}"
             )
+
+
+def keyed_error(where: str, exc: InputError) -> InputError:
+    """``exc`` with ``where`` (``"map.toml: key 'joints.<pattern>'"``) in front (the one "where: error" form).
+
+    Engines call this on the error of applying a mapped joint, so that the message names the map
+    file and key the joint came from; an empty ``where`` (no map) leaves the message as it is.
+    """
+    return InputError(f"{where}: {exc}" if where else str(exc))

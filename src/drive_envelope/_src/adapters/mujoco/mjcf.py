@@ -335,7 +335,7 @@ def _warn_tighter_force_range(spec: mujoco.MjSpec, actuator: Any, name: str, ite
 
 def _at(item: Assignment, exc: InputError) -> InputError:
     """``exc`` with the map key (or flag) of ``item`` in front, instead of the ``add_drive(...)`` call."""
-    from drive_envelope._src.adapters.usd.joint_map import keyed_error
+    from drive_envelope._src.validation import keyed_error
 
     message = str(exc).removeprefix(f"add_drive(joint={item.joint!r}): ")
     if message != str(exc):

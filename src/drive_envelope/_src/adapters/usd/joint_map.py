@@ -52,7 +52,7 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.validation import nearest_key
+from drive_envelope._src.validation import keyed_error, nearest_key  # keyed_error: re-exported for apply
 
 __all__ = [
     "JointMap",
@@ -393,12 +393,3 @@ def resolve_envelopes(match: MapMatch) -> list[MappedJoint]:
             )
         resolved.append(MappedJoint(joint=item.joint, entry=item.entry, envelope=cache[source]))
     return resolved
-
-
-def keyed_error(where: str, exc: InputError) -> InputError:
-    """``exc`` with the entry's ``where`` (``"map.toml: key 'joints.<pattern>'"``) in front.
-
-    Engines call this on the error of applying a mapped joint, so that the message names the map
-    file and key the joint came from; an empty ``where`` (no map) leaves the message as it is.
-    """
-    return InputError(f"{where}: {exc}" if where else str(exc))
