@@ -26,12 +26,6 @@ constexpr char kPluginName[] = "drive_envelope.envelope";
 constexpr char kAttrDriveType[] = "drive_type";
 constexpr char kAttrInput[] = "input";
 
-// the numbers were <config> attributes before they moved to dynprm; they are declared so that
-// an old model gets a message that says where they went instead of MuJoCo's "unknown attribute"
-constexpr const char* kLegacyAttrs[kNumSlots] = {
-    "max_effort", "max_actuator_velocity", "velocity_dependent_resistance",
-    "speed_effort_gradient", "stiffness", "damping"};
-
 constexpr const char* kSlotNames[kNumSlots] = {
     "max_effort", "max_actuator_velocity", "velocity_dependent_resistance",
     "speed_effort_gradient", "stiffness", "damping"};
@@ -84,25 +78,6 @@ bool ReadInput(const mjModel* m, int instance, int* input, std::string* error) {
   }
   *input = bits;
   return true;
-}
-
-// a legacy numeric <config> attribute: say where the numbers live now, with the values given
-bool RefuseLegacyNumbers(const mjModel* m, int instance, std::string* error) {
-  int first = -1;
-  std::string example;
-  for (int s = 0; s < kNumSlots; s++) {
-    const char* value = mj_getPluginConfig(m, instance, kLegacyAttrs[s]);
-    bool given = value && value[0];
-    if (given && first < 0) first = s;
-    std::string text = given ? value : (s == kSlotMaxActuatorVelocity ? "-1" : "0");
-    if (text == "inf") text = "-1";
-    example += (s ? " " : "") + text;
-  }
-  if (first < 0) return true;
-  *error = std::string("attribute '") + kLegacyAttrs[first] +
-           "' is no longer a <config> key: a drive's numbers are its actuator's " + kLayout +
-           " (-1: no limit), read at every step; here dynprm=\"" + example + "\"";
-  return false;
 }
 
 int InputCount(int input) {
@@ -361,7 +336,7 @@ bool SolverSetting::FromModel(const mjModel* m, int id, SolverSetting* setting,
 bool InstanceConfig::FromModel(const mjModel* m, int instance, InstanceConfig* config,
                                std::string* error) {
   InstanceConfig c;
-  if (!RefuseLegacyNumbers(m, instance, error) || !ReadInput(m, instance, &c.input, error)) {
+  if (!ReadInput(m, instance, &c.input, error)) {
     return false;
   }
   const char* type = mj_getPluginConfig(m, instance, kAttrDriveType);
@@ -467,9 +442,7 @@ void Envelope::RegisterPlugin() {
   plugin.name = kPluginName;
   plugin.capabilityflags |= mjPLUGIN_ACTUATOR;
 
-  static const char* attributes[] = {
-      kAttrDriveType, kAttrInput, kLegacyAttrs[0], kLegacyAttrs[1], kLegacyAttrs[2],
-      kLegacyAttrs[3], kLegacyAttrs[4], kLegacyAttrs[5]};
+  static const char* attributes[] = {kAttrDriveType, kAttrInput};
   plugin.nattribute = sizeof(attributes) / sizeof(attributes[0]);
   plugin.attributes = attributes;
 
