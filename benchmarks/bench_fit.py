@@ -74,7 +74,7 @@ def _both_lines(env: PerformanceEnvelope, noise: float, rng: np.random.Generator
     corner = _knee(env)
     v1 = rng.uniform(0.0, corner, 150)
     t2 = rng.uniform(0.0, float(env.effort_limit(corner)), 150)
-    v, t = _noisy(env, np.r_[v1, env.velocity_limit(t2)], np.r_[env.effort_limit(v1), t2], noise, rng)
+    v, t = _noisy(env, np.r_[v1, env.velocity_at_effort(t2)], np.r_[env.effort_limit(v1), t2], noise, rng)
     vi, ti = _interior(env, 600, rng)
     return np.r_[v, vi], np.r_[t, ti]
 
@@ -141,7 +141,7 @@ def _speed_line(trials: int, noise: float, q: float, seed: int) -> str:
             max_effort=limit / gradient, max_actuator_velocity=limit, speed_effort_gradient=gradient
         )
         t = rng.uniform(0.0, limit / gradient, 200)
-        v, t = _noisy(truth, truth.velocity_limit(t), t, noise, rng)
+        v, t = _noisy(truth, truth.velocity_at_effort(t), t, noise, rng)
         vi, ti = _interior(truth, 300, rng)
         env = fit_samples(np.r_[v, vi], np.r_[t, ti], FitOptions(outlier_quantile=q, bootstrap=0)).envelope
         read_as_eq2 = math.isfinite(env.max_actuator_velocity) and env.velocity_dependent_resistance == 0.0

@@ -113,7 +113,7 @@ def test_check_writes_the_violation_plot(tmp_path: Path, envelope_file: Path) ->
 def test_fit_json_and_output_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Print the four SI parameters with uncertainties and write an envelope file `envelope show` reads."""
     effort = np.linspace(0.0, ENV.stall_effort(), 300)
-    velocity = ENV.velocity_limit(effort)
+    velocity = ENV.velocity_at_effort(effort)
     log = write_log(
         tmp_path / "sweep.csv",
         [(0.01 * i, v, e) for i, (v, e) in enumerate(zip(velocity.tolist(), effort.tolist(), strict=True))],
@@ -182,7 +182,7 @@ def test_fit_report_names_the_samples_that_decided_each_line(
     v1 = np.linspace(0.0, 0.9 * corner, 10)
     t2 = np.linspace(float(ENV.effort_limit(1.05 * corner)), 0.5, 10)
     inner = np.linspace(0.1, 4.5, 80)
-    velocity = [*v1.tolist(), *ENV.velocity_limit(t2).tolist(), *inner.tolist()]
+    velocity = [*v1.tolist(), *ENV.velocity_at_effort(t2).tolist(), *inner.tolist()]
     effort = [*ENV.effort_limit(v1).tolist(), *t2.tolist(), *(0.6 * ENV.effort_limit(inner)).tolist()]
     log = write_log(
         tmp_path / "run.csv",

@@ -46,7 +46,7 @@ def sweep(
     """A torque-speed sweep: for efforts uniform in [0, stall], the largest feasible speed, all quadrants."""
     rng = np.random.default_rng(seed)
     effort = rng.uniform(0.0, env.stall_effort(), n)
-    velocity = env.velocity_limit(effort)
+    velocity = env.velocity_at_effort(effort)
     velocity = velocity + rng.normal(0.0, noise * env.no_load_velocity(), n)
     effort = effort + rng.normal(0.0, noise * env.max_effort, n)
     return velocity * rng.choice([-1.0, 1.0], n), effort * rng.choice([-1.0, 1.0], n)
@@ -265,7 +265,7 @@ def test_fixed_parameters_hold_on_a_speed_torque_line() -> None:
     """Keep a fixed max_effort on a line to zero effort; a fixed R keeps the line as eq. 1."""
     line = PerformanceEnvelope(max_effort=5.0, max_actuator_velocity=10.0, speed_effort_gradient=2.0)
     effort = np.linspace(0.0, 5.0, 50)
-    velocity = line.velocity_limit(effort)  # from (0, 5 N*m) to (10 rad/s, 0): one line
+    velocity = line.velocity_at_effort(effort)  # from (0, 5 N*m) to (10 rad/s, 0): one line
     held = fit_samples(velocity, effort, FitOptions(fixed={"max_effort": 6.0}, bootstrap=0)).envelope
     assert held.max_effort == 6.0 and held.velocity_dependent_resistance == 0.0
     assert held.max_actuator_velocity == pytest.approx(10.0, rel=1e-9)

@@ -72,7 +72,7 @@ def test_effort_limit_values() -> None:
 def test_velocity_limit_values() -> None:
     """Evaluate the velocity limit at hand-picked efforts."""
     tau = np.array([0.0, 8.0, 10.0, 12.0, -8.0])
-    np.testing.assert_allclose(ENV.velocity_limit(tau), [5.0, 2.0, 0.0, 0.0, 2.0], atol=1e-12)
+    np.testing.assert_allclose(ENV.velocity_at_effort(tau), [5.0, 2.0, 0.0, 0.0, 2.0], atol=1e-12)
 
 
 def test_corners() -> None:
@@ -245,4 +245,4 @@ def test_subnormal_slopes_give_no_nan_and_no_warning() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert env.effort_limit([0.0, 3.0, 4.0]).tolist() == [2.0, 0.0, 0.0]
-        assert env.velocity_limit([0.0, 1.0, 3.0]).tolist() == [3.0, 3.0, 0.0]
+        assert env.velocity_at_effort([0.0, 1.0, 3.0]).tolist() == [3.0, 3.0, 0.0]

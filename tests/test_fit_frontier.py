@@ -56,7 +56,7 @@ def both_lines(
     corner = knee(env)
     v1 = rng.uniform(0.0, corner, n1)
     t2 = rng.uniform(0.0, float(env.effort_limit(corner)), n2)
-    return np.concatenate([v1, env.velocity_limit(t2)]), np.concatenate([env.effort_limit(v1), t2])
+    return np.concatenate([v1, env.velocity_at_effort(t2)]), np.concatenate([env.effort_limit(v1), t2])
 
 
 def signed(v: np.ndarray, t: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -251,7 +251,7 @@ def test_a_single_line_to_zero_effort_is_the_speed_line() -> None:
     t = rng.uniform(0.0, 8.0, 200)
     vi, ti = interior(truth, 400, rng)
     result = fit_samples(
-        np.concatenate([truth.velocity_limit(t), vi]), np.concatenate([t, ti]), FitOptions(bootstrap=0)
+        np.concatenate([truth.velocity_at_effort(t), vi]), np.concatenate([t, ti]), FitOptions(bootstrap=0)
     )
     assert_close(result.envelope, truth, 1e-6)
     assert result.estimate("velocity_dependent_resistance").status == "fitted"
@@ -292,11 +292,11 @@ def test_clean_and_noisy_hulls_are_told_apart() -> None:
 
 def test_sample_ranges_and_json_of_the_evidence() -> None:
     """Number the deciding samples from 1 in runs, and cap the runs JSON lists."""
-    from drive_envelope._src.analysis.fit_evidence import MAX_JSON_RANGES, FitLine, sample_ranges
+    from drive_envelope._src.analysis.fit_evidence import MAX_JSON_RANGES, LineEvidence, sample_ranges
 
     assert sample_ranges(np.array([0, 1, 2, 7, 9, 10])) == [(1, 3), (8, 8), (10, 11)]
     assert sample_ranges(np.array([], dtype=np.intp)) == []
-    scattered = FitLine(
+    scattered = LineEvidence(
         curve="velocity",
         identified=True,
         bounded=2 * MAX_JSON_RANGES + 2,

@@ -27,7 +27,7 @@ def test_an_envelope_without_an_effort_limit_is_inf() -> None:
         np.testing.assert_array_equal(
             env.effort_limit([0.0, 10.0, 31.0, math.inf, math.nan]), [300, 200, 0, 0, 0]
         )
-        np.testing.assert_array_equal(env.velocity_limit([0.0, 1.0, math.inf]), [30.0, 29.9, 0.0])
+        np.testing.assert_array_equal(env.velocity_at_effort([0.0, 1.0, math.inf]), [30.0, 29.9, 0.0])
     assert PerformanceEnvelope.from_dict({"max_effort": "inf"}).max_effort == math.inf
     free = PerformanceEnvelope(max_effort=math.inf)
     np.testing.assert_array_equal(free.effort_limit([0.0, 1e300]), [math.inf, math.inf])

@@ -85,7 +85,7 @@ def main() -> None:
         speed_effort_gradient=1.5,
     )
     print(f"envelope: {env}")
-    no_load = float(env.velocity_limit(np.zeros(1))[0])
+    no_load = float(env.velocity_at_effort(np.zeros(1))[0])
     print(
         f"no-load speed {no_load:.3f} rad/s, stall effort {float(env.effort_limit(np.zeros(1))[0]):.3f} N*m"
     )

@@ -21,7 +21,6 @@ from drive_envelope._src.analysis.api import (
     check_samples,
     fit_curve,
     fit_log,
-    resolve_envelopes,
 )
 from drive_envelope._src.analysis.check import (
     DEFAULT_MAX_JOINTS,
@@ -34,7 +33,13 @@ from drive_envelope._src.analysis.check import (
     Violation,
 )
 from drive_envelope._src.analysis.curve import read_curve
-from drive_envelope._src.analysis.fit import FitLine, FitOptions, FitResult, ParameterEstimate, fit_samples
+from drive_envelope._src.analysis.fit import (
+    FitOptions,
+    FitResult,
+    LineEvidence,
+    ParameterEstimate,
+    fit_samples,
+)
 from drive_envelope._src.analysis.logs import DEFAULT_CHUNK_ROWS, LogChunk, LogColumns, iter_log, read_log
 from drive_envelope._src.analysis.mapping import JointMapping, load_joint_mapping
 
@@ -45,12 +50,12 @@ __all__ = [
     "CheckOptions",
     "CheckReport",
     "EnvelopeSource",
-    "FitLine",
     "FitOptions",
     "FitResult",
     "JointCheck",
     "JointMapping",
     "KeptPoints",
+    "LineEvidence",
     "LogChunk",
     "LogColumns",
     "MarginSummary",
@@ -65,5 +70,4 @@ __all__ = [
     "load_joint_mapping",
     "read_curve",
     "read_log",
-    "resolve_envelopes",
 ]

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
 from drive_envelope._src.identify.optimize import SearchOptions, SearchProgress, SearchResult
-from drive_envelope._src.identify.parameters import DEFAULT_FIT, PARAMETERS
+from drive_envelope._src.identify.parameters import DEFAULT_FIT, IDENTIFIABLE
 from drive_envelope._src.identify.playback import Playback, replay_logs
 from drive_envelope._src.identify.report import identification_text, identification_to_dict
 from drive_envelope._src.identify.run import Estimate, Identification, LogError, identify
@@ -35,7 +35,7 @@ from drive_envelope._src.plots.identification import identification_figure, save
 
 __all__ = [
     "DEFAULT_FIT",
-    "PARAMETERS",
+    "IDENTIFIABLE",
     "BenchLog",
     "Estimate",
     "Identification",

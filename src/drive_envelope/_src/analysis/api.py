@@ -29,7 +29,7 @@ from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["EnvelopeSource", "check_log", "check_samples", "fit_curve", "fit_log", "resolve_envelopes"]
+__all__ = ["EnvelopeSource", "check_log", "check_samples", "fit_curve", "fit_log", "resolve_envelope_source"]
 
 EnvelopeSource = (
     PerformanceEnvelope | JointMapping | Mapping[str, PerformanceEnvelope] | str | os.PathLike[str]
@@ -38,7 +38,7 @@ EnvelopeSource = (
 file, a datasheet file or a catalog actuator name."""
 
 
-def resolve_envelopes(spec: EnvelopeSource) -> PerformanceEnvelope | JointMapping:
+def resolve_envelope_source(spec: EnvelopeSource) -> PerformanceEnvelope | JointMapping:
     """Turn an envelope source into one envelope or a :class:`JointMapping`.
 
     Raises:
@@ -81,7 +81,7 @@ def check_log(
         InputError: unreadable envelope or log, missing column, bad cell (naming row and column),
             a joint without envelope.
     """
-    resolved = resolve_envelopes(envelopes)
+    resolved = resolve_envelope_source(envelopes)
     columns = columns or LogColumns()
     kinds = (
         {resolved.joint}

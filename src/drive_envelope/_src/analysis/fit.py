@@ -18,7 +18,7 @@ in three steps:
 3. **Lines** (:mod:`.fit_line`): each line is the tightest bound of its samples (smallest mean gap)
    with at most a fraction ``outlier_quantile`` of them outside (0: all inside).
 
-The result says which samples decided each line (:class:`FitLine`): those within 1 % of it, by
+The result says which samples decided each line (:class:`LineEvidence`): those within 1 % of it, by
 sample number and quadrant pair.
 
 Identifiability: a sweep that never reaches the speed limit cannot determine
@@ -47,7 +47,7 @@ from drive_envelope._src.analysis.fit_estimates import (
     bootstrap,
     estimates,
 )
-from drive_envelope._src.analysis.fit_evidence import FitLine, line_evidence, support_warnings
+from drive_envelope._src.analysis.fit_evidence import LineEvidence, line_evidence, support_warnings
 from drive_envelope._src.analysis.fit_frontier import Frontier
 from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
 from drive_envelope._src.analysis.fit_rounds import frontier_fit
@@ -55,7 +55,7 @@ from drive_envelope._src.envelope.line_model import Model
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["FitLine", "FitOptions", "FitResult", "ParameterEstimate", "ParameterStatus", "fit_samples"]
+__all__ = ["FitOptions", "FitResult", "LineEvidence", "ParameterEstimate", "ParameterStatus", "fit_samples"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -135,7 +135,7 @@ class FitResult:
     """Largest gap of a frontier sample to the hull, as a fraction of the hull's radius."""
     set_aside: int
     """Samples far outside the fit left out of the hull (with an outlier allowance; kept in the fit)."""
-    lines: tuple[FitLine, FitLine]
+    lines: tuple[LineEvidence, LineEvidence]
     """The samples that decided eq. 1 and eq. 2 (in that order)."""
     effort_residuals: FloatArray
     """``|tau| - (max_effort - R|v|)`` of the frontier samples eq. 1 bounds, positive outside [N*m or N]."""

@@ -18,7 +18,7 @@ __all__ = [
     "MAX_JSON_RANGES",
     "SPIKE_RATIO",
     "WARNING",
-    "FitLine",
+    "LineEvidence",
     "line_evidence",
     "sample_ranges",
     "support_warnings",
@@ -48,7 +48,7 @@ def sample_ranges(indices: IntArray) -> list[tuple[int, int]]:
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
-class FitLine:
+class LineEvidence:
     """The samples that decided one line of a fit."""
 
     curve: Literal["effort", "velocity"]
@@ -87,7 +87,7 @@ class FitLine:
 
 def line_evidence(
     model: Model, x: FloatArray, y: FloatArray, pair: npt.NDArray[np.int8], frontier: npt.NDArray[np.bool_]
-) -> tuple[FitLine, FitLine]:
+) -> tuple[LineEvidence, LineEvidence]:
     """The evidence for eq. 1 and eq. 2 of ``model`` among the ``frontier`` samples.
 
     Args:
@@ -120,10 +120,10 @@ def _line(
     x: FloatArray,
     y: FloatArray,
     pair: npt.NDArray[np.int8],
-) -> FitLine:
+) -> LineEvidence:
     index = np.flatnonzero(near)
     spans = index.size > 0
-    return FitLine(
+    return LineEvidence(
         curve=curve,
         identified=identified,
         bounded=int(np.count_nonzero(bounded)),
@@ -136,7 +136,7 @@ def _line(
 
 
 def support_warnings(
-    lines: tuple[FitLine, FitLine], x: FloatArray, y: FloatArray, joint: JointType, held: set[str]
+    lines: tuple[LineEvidence, LineEvidence], x: FloatArray, y: FloatArray, joint: JointType, held: set[str]
 ) -> list[str]:
     """Warnings (notes starting with :data:`WARNING`) for each fitted line that rests on a fluke.
 

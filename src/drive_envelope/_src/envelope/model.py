@@ -153,7 +153,7 @@ class PerformanceEnvelope:
                 limit[~(speed <= self.max_actuator_velocity)] = 0.0
         return np.fmax(limit, 0.0, out=limit)  # fmax: a NaN speed gives 0
 
-    def velocity_limit(self, effort: ArrayLike) -> FloatArray:
+    def velocity_at_effort(self, effort: ArrayLike) -> FloatArray:
         """Largest |velocity| the envelope allows while the drive exerts ``effort`` (eq. 1 and eq. 2).
 
         Args:
@@ -215,7 +215,7 @@ class PerformanceEnvelope:
 
     def no_load_velocity(self) -> float:
         """Largest velocity at zero effort [rad/s or m/s] (``inf`` when unbounded)."""
-        return float(self.velocity_limit(0.0))
+        return float(self.velocity_at_effort(0.0))
 
     def corners(self, *, velocity_extent: float | None = None) -> QuadrantCorners:
         """Corner points of the first quadrant; the other quadrants mirror them.

@@ -32,17 +32,14 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.params.table import PARAMETERS as ENVELOPE_PARAMETERS
 from drive_envelope._src.scenario.spec import Scenario
 
-__all__ = ["DEFAULT_FIT", "PARAMETERS", "ParameterSpace", "parameter_units", "start_values"]
+__all__ = ["DEFAULT_FIT", "IDENTIFIABLE", "ParameterSpace", "parameter_units", "start_values"]
 
 FloatArray = npt.NDArray[np.float64]
 
-PARAMETERS: dict[str, tuple[str, str]] = {
-    "max_effort": ("N*m", "N"),
-    "max_actuator_velocity": ("rad/s", "m/s"),
-    "velocity_dependent_resistance": ("N*m*s/rad", "N*s/m"),
-    "speed_effort_gradient": ("(rad/s)/(N*m)", "(m/s)/N"),
+_STAND_UNITS: dict[str, tuple[str, str]] = {
     "stiffness": ("N*m/rad", "N/m"),
     "duty_effort": ("N*m", "N"),
     "damping": ("N*m*s/rad", "N*s/m"),
@@ -52,7 +49,13 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "armature": ("kg*m**2", "kg"),
     "angle_offset": ("rad", "rad"),
 }
-"""Parameter name -> SI unit (revolute, prismatic)."""
+"""The stand's own parameters (not in the envelope table) -> SI unit (revolute, prismatic)."""
+IDENTIFIABLE: dict[str, tuple[str, str]] = {
+    # the envelope's four from the one parameter table, so identify and every engine agree on units
+    **{row.name: (row.unit_revolute, row.unit_prismatic) for row in ENVELOPE_PARAMETERS},
+    **_STAND_UNITS,
+}
+"""Every parameter ``identify`` can estimate -> SI unit (revolute, prismatic)."""
 DEFAULT_FIT = (
     "max_effort",
     "max_actuator_velocity",
@@ -67,7 +70,7 @@ _ENVELOPE = DEFAULT_FIT
 def parameter_units(joint: str = "revolute") -> dict[str, str]:
     """SI unit of every parameter for the joint type."""
     index = 0 if joint == "revolute" else 1
-    return {name: units[index] for name, units in PARAMETERS.items()}
+    return {name: units[index] for name, units in IDENTIFIABLE.items()}
 
 
 def start_values(scenario: Scenario, duty_effort: float | None = None) -> dict[str, float]:
@@ -174,9 +177,9 @@ def build_space(
     """
     fixed = start_values(scenario, duty_effort)
     for name in names:
-        if name not in PARAMETERS:
+        if name not in IDENTIFIABLE:
             raise InputError(
-                f"--fit {name!r}: unknown parameter; expected names from: {', '.join(PARAMETERS)}"
+                f"--fit {name!r}: unknown parameter; expected names from: {', '.join(IDENTIFIABLE)}"
             )
     if len(set(names)) != len(names):
         raise InputError(f"--fit {','.join(names)}: a parameter is named twice")

@@ -139,7 +139,7 @@ def identify(
         train: Training logs (CSV or Parquet, see :mod:`drive_envelope._src.identify.logs`).
         stand: The stand file (:mod:`drive_envelope._src.identify.stand`).
         validate: Held-out logs, replayed with the result only.
-        fit: Parameters to estimate (:data:`~drive_envelope._src.identify.parameters.PARAMETERS`).
+        fit: Parameters to estimate (:data:`~drive_envelope._src.identify.parameters.IDENTIFIABLE`).
         options: Search settings (defaults: :class:`SearchOptions`).
         engine: ``"reference"``, ``"physx"`` or ``"mujoco"``: replay the result there too.
         progress: Called with a :class:`SearchProgress` after each generation and polish step.

@@ -103,14 +103,14 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.fleet import is_fleet
 
     if is_fleet(args.log) or args.scheduler is not None:  # many logs: one report per part, merged
-        from drive_envelope._src.analysis.api import resolve_envelopes
+        from drive_envelope._src.analysis.api import resolve_envelope_source
         from drive_envelope._src.analysis.fleet import check_fleet
         from drive_envelope._src.errors import InputError
 
         if args.plot:
             raise InputError(f"--plot draws one log; {args.log!r} is a fleet of logs")
         fleet = check_fleet(
-            resolve_envelopes(args.envelope),
+            resolve_envelope_source(args.envelope),
             args.log,
             columns=columns_from_args(args),
             options=options,
