@@ -35,7 +35,7 @@ $(DEMO_STAMP): pyproject.toml Makefile
 # the native MuJoCo actuator plugin, built against the installed mujoco wheel's headers and library
 PLUGIN := plugin/mujoco/build/libdrive_envelope_mujoco.so
 $(PLUGIN): $(STAMP) $(wildcard plugin/mujoco/*.cc plugin/mujoco/*.h) plugin/mujoco/CMakeLists.txt
-	$(BIN)/python -m drive_envelope._src.adapters.mujoco.build --quiet
+	$(BIN)/python -m drive_envelope._src.adapters.mujoco.build --quiet --force
 
 setup: $(STAMP) $(PLUGIN)
 

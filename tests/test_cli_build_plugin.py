@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -41,6 +42,27 @@ def test_a_build_for_another_mujoco_is_not_current(tmp_path: Path) -> None:
     assert build.current_build(tmp_path) is None
     info.write_text(json.dumps({"mujoco_version": version}), encoding="utf-8")
     assert build.current_build(tmp_path) == tmp_path / build.library_name()
+
+
+@pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="needs mujoco")
+def test_a_build_older_than_a_source_is_not_current(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An edited plugin source makes the build stale, so `build-plugin` rebuilds instead of reusing it."""
+    sources, out = tmp_path / "src", tmp_path / "build"
+    sources.mkdir()
+    out.mkdir()
+    (sources / "CMakeLists.txt").write_text("project(x)\n", encoding="utf-8")
+    monkeypatch.setattr(build, "plugin_source_dir", lambda: sources)
+    library = out / build.library_name()
+    library.write_bytes(b"\x7fELF")
+    (out / build.BUILD_INFO).write_text(
+        json.dumps({"mujoco_version": build.mujoco_paths()[2]}), encoding="utf-8"
+    )
+    os.utime(sources / "CMakeLists.txt", (1_000, 1_000))
+    os.utime(library, (2_000, 2_000))
+    assert build.current_build(out) == library
+    (sources / "envelope.cc").write_text("// edited\n", encoding="utf-8")
+    os.utime(sources / "envelope.cc", (3_000, 3_000))
+    assert build.current_build(out) is None
 
 
 @pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="needs mujoco")

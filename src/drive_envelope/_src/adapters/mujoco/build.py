@@ -106,14 +106,28 @@ def cache_key(prefix: str | None = None, version: str | None = None) -> str:
 
 
 def current_build(build_dir: str | os.PathLike[str] | None = None) -> Path | None:
-    """The library of ``build_dir`` if it was built for the installed MuJoCo, else None."""
+    """The library of ``build_dir`` if it was built for the installed MuJoCo from today's sources, else None.
+
+    A source (``*.cc``, ``*.h``, ``CMakeLists.txt``) newer than the library makes it stale: an
+    edited plugin is rebuilt, never silently reused.
+    """
     out = Path(build_dir) if build_dir is not None else default_build_dir()
     library, info = out / library_name(), out / BUILD_INFO
     try:
         recorded = json.loads(info.read_text(encoding="utf-8")).get("mujoco_version")
+        built_at = library.stat().st_mtime
     except (OSError, ValueError, AttributeError):
         return None
-    return library if library.is_file() and recorded == mujoco_paths()[2] else None
+    if recorded != mujoco_paths()[2] or _newest_source() > built_at:
+        return None
+    return library
+
+
+def _newest_source() -> float:
+    """Modification time of the newest plugin source [s since the epoch]; 0 when none is found."""
+    source = plugin_source_dir()
+    files = [*source.glob("*.cc"), *source.glob("*.h"), source / "CMakeLists.txt"]
+    return max((f.stat().st_mtime for f in files if f.is_file()), default=0.0)
 
 
 def library_name() -> str:
