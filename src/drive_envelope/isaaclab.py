@@ -28,8 +28,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from drive_envelope._src.adapters.isaaclab.actuator import set_response_from_mass_matrix
-from drive_envelope._src.adapters.isaaclab.events import randomize_actuator_envelope
+from drive_envelope._src.adapters.isaaclab.events import (
+    randomize_actuator_envelope,
+    set_response_from_mass_matrix,
+)
 from drive_envelope._src.adapters.isaaclab.implicit import (
     ImplicitEnvelopeSetup,
     author_implicit_envelopes,
@@ -65,14 +67,14 @@ __all__ = [
     "write_envelope_to_sim",
 ]
 
-# Created by __getattr__ on first access (annotations only: the module stays free of Isaac Lab until then)
+# Loaded by __getattr__ on first access (annotations only: the module stays free of Isaac Lab until then)
 PerformanceEnvelopeActuator: Any
 PerformanceEnvelopeActuatorCfg: Any
 PerformanceEnvelopeArticulationCfg: Any
 
 
 def __getattr__(name: str) -> Any:
-    """Define the actuator and its cfg on first access (this imports ``isaaclab.actuators``)."""
+    """Load the actuator and its cfg on first access (this imports ``isaaclab.actuators`` and torch)."""
     if name == "PerformanceEnvelopeArticulationCfg":
         from drive_envelope._src.adapters.isaaclab.newton_route import build_articulation_cfg
 
@@ -81,14 +83,12 @@ def __getattr__(name: str) -> Any:
         except ImportError as exc:
             raise ImportError(f"{name} needs Isaac Lab 3.x (isaaclab.assets, newton, pxr): {exc}") from exc
     if name in ("PerformanceEnvelopeActuator", "PerformanceEnvelopeActuatorCfg"):
-        from drive_envelope._src.adapters.isaaclab.actuator import build
-
         try:
-            cfg_class, actuator_class = build()
+            from drive_envelope._src.adapters.isaaclab import actuator_classes
         except ImportError as exc:
             raise ImportError(
                 f"{name} needs Isaac Lab's isaaclab.actuators (run inside Isaac Lab / Isaac Sim; "
                 f"see docs/isaaclab.md): {exc}"
             ) from exc
-        return cfg_class if name.endswith("Cfg") else actuator_class
+        return getattr(actuator_classes, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

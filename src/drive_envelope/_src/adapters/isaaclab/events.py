@@ -1,16 +1,20 @@
-"""``randomize_actuator_envelope``: an Isaac Lab event term that randomizes the envelope per environment.
+"""Run-time functions on an articulation's envelope actuators: the event term and the mass-matrix response.
 
-It does for the envelope what Isaac Lab's ``randomize_actuator_gains`` (``isaaclab/envs/mdp/events.py``)
-does for the gains: for each :class:`PerformanceEnvelopeActuator` of the asset it takes the
-configured values of the selected environments and joints (``default_*``), applies the operation
-with a sample of the distribution and writes the result into the actuator's tensor
-(``actuator.speed_effort_gradient[env_ids] = ...``), which the next ``compute`` reads. Values are
-clipped at 0 from below (a negative envelope value is invalid), and ``inf`` stays ``inf``. Use it
-as a function-style term::
+``randomize_actuator_envelope`` is an Isaac Lab event term that randomizes the envelope per
+environment. It does for the envelope what Isaac Lab's ``randomize_actuator_gains``
+(``isaaclab/envs/mdp/events.py``) does for the gains: for each :class:`PerformanceEnvelopeActuator`
+of the asset it takes the configured values of the selected environments and joints
+(``default_*``), applies the operation with a sample of the distribution and writes the result
+into the actuator's tensor (``actuator.speed_effort_gradient[env_ids] = ...``), which the next
+``compute`` reads. Values are clipped at 0 from below (a negative envelope value is invalid), and
+``inf`` stays ``inf``. Use it as a function-style term::
 
     EventTermCfg(func=randomize_actuator_envelope, mode="reset", params={
         "asset_cfg": SceneEntityCfg("robot", joint_names=[".*_KFE"]),
         "speed_effort_gradient_distribution_params": (0.8, 1.2), "operation": "scale"})
+
+``set_response_from_mass_matrix`` gives the end-of-step clip each joint's unit response from the
+articulation's mass matrix. Both import Isaac Lab, torch and the actuator class when they run.
 """
 
 from __future__ import annotations
@@ -19,10 +23,17 @@ from typing import Any
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["randomize_actuator_envelope"]
+__all__ = ["randomize_actuator_envelope", "set_response_from_mass_matrix"]
 
 _OPERATIONS = ("abs", "add", "scale")
 _DISTRIBUTIONS = ("uniform", "log_uniform", "gaussian")
+
+
+def _envelope_actuators(articulation: Any) -> list[Any]:
+    """The articulation's :class:`PerformanceEnvelopeActuator` groups (this imports Isaac Lab)."""
+    from drive_envelope._src.adapters.isaaclab.actuator_classes import PerformanceEnvelopeActuator
+
+    return [a for a in articulation.actuators.values() if isinstance(a, PerformanceEnvelopeActuator)]
 
 
 def _columns(actuator: Any, joint_ids: Any, device: Any) -> Any:
@@ -70,7 +81,7 @@ def randomize_actuator_envelope(
     import torch
     from isaaclab.utils import math as math_utils
 
-    from drive_envelope._src.adapters.isaaclab.actuator import build, envelope_attributes
+    from drive_envelope._src.adapters.isaaclab.actuator import envelope_attributes
 
     if operation not in _OPERATIONS:
         raise InputError(
@@ -98,10 +109,7 @@ def randomize_actuator_envelope(
             raise InputError(
                 f"randomize_actuator_envelope: {attribute} parameters {params!r}; expected (a, b)"
             )
-    actuator_class: Any = build()[1]
-    asset = env.scene[asset_cfg.name]
-    groups: list[Any] = [a for a in asset.actuators.values() if isinstance(a, actuator_class)]
-    for actuator in groups:
+    for actuator in _envelope_actuators(env.scene[asset_cfg.name]):
         device = actuator.max_effort.device
         every = torch.arange(actuator.max_effort.shape[0], device=device)
         # None and slice(None) (what EventManager.apply passes without env_ids) both mean every env
@@ -118,3 +126,34 @@ def randomize_actuator_envelope(
             block = current[rows]
             block[:, columns] = torch.where(torch.isinf(default), default, value.clamp_min(0.0))
             current[rows] = block
+
+
+def set_response_from_mass_matrix(articulation: Any) -> None:
+    """Give every envelope actuator of ``articulation`` its joints' unit response ``(M^-1)_ii``.
+
+    Reads the articulation's joint-space mass matrices from PhysX
+    (``articulation.root_physx_view.get_generalized_mass_matrices()``, ``(num_envs, n, n)``; with a
+    floating base ``n`` is the joint count plus 6, the base's rows first), inverts them (batched
+    ``torch.linalg.inv``) and writes the diagonal at each actuator's joints to its ``response``
+    [1/(kg*m^2) or 1/kg]. Call it every step (e.g. before ``env.step``'s physics steps, or as an
+    interval event) for the response at the current pose, or once for a fixed one.
+
+    Args:
+        articulation: An Isaac Lab ``Articulation`` whose ``actuators`` include
+            :class:`PerformanceEnvelopeActuator` s.
+    """
+    import torch
+
+    matrices = articulation.root_physx_view.get_generalized_mass_matrices()
+    diagonal = torch.diagonal(torch.linalg.inv(matrices), dim1=-2, dim2=-1)
+    offset = diagonal.shape[-1] - int(articulation.num_joints)
+    if offset not in (0, 6):
+        raise InputError(
+            f"set_response_from_mass_matrix: mass matrices of size {diagonal.shape[-1]} for "
+            f"{articulation.num_joints} joints; expected the joint count, or it plus 6 (floating base)"
+        )
+    for actuator in _envelope_actuators(articulation):
+        ids = actuator.joint_indices
+        columns = torch.arange(articulation.num_joints, device=diagonal.device)[ids] + offset
+        actuator.response[:] = diagonal[:, columns].to(actuator.response)
+        actuator.response_source = "mass_matrix"
