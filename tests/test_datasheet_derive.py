@@ -18,7 +18,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from drive_envelope._src.datasheet.derive import EFFORT_LIMITS, VELOCITY_LIMITS, derive
+from drive_envelope._src.datasheet.derive import derive
+from drive_envelope._src.datasheet.limits import EFFORT_LIMITS, VELOCITY_LIMITS
 from drive_envelope._src.datasheet.load import datasheet_from_mapping
 from drive_envelope.errors import InputError
 

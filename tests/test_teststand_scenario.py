@@ -8,12 +8,12 @@ from pathlib import Path
 import pytest
 
 from drive_envelope import InputError, PerformanceEnvelope
+from drive_envelope._src.scenario.overrides import parse_override
 from drive_envelope._src.scenario.spec import (
     DriveSpec,
     JointSpec,
     Scenario,
     load_scenario,
-    parse_override,
 )
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"

@@ -23,7 +23,6 @@ from drive_envelope._src.analysis.api import (
     fit_log,
 )
 from drive_envelope._src.analysis.check import (
-    DEFAULT_MAX_JOINTS,
     MARGIN_QUANTILES,
     CheckOptions,
     CheckReport,
@@ -42,6 +41,7 @@ from drive_envelope._src.analysis.fit import (
 )
 from drive_envelope._src.analysis.logs import DEFAULT_CHUNK_ROWS, LogChunk, LogColumns, iter_log, read_log
 from drive_envelope._src.analysis.mapping import JointMapping, load_joint_mapping
+from drive_envelope._src.analysis.report import DEFAULT_MAX_JOINTS
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-__all__ = ["DriveEnvelopeError", "EngineWarning", "InputError", "UnitsError"]
-
 
 class DriveEnvelopeError(Exception):
     """Base class of every error drive_envelope raises on purpose."""

@@ -5,8 +5,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-__all__ = ["format_table", "format_value"]
-
 
 def format_value(value: float | None, unit: str = "") -> str:
     """Readable number with unit; ``-`` for a missing value."""

@@ -37,8 +37,6 @@ from drive_envelope._src.errors import UnitsError
 if TYPE_CHECKING:
     import pint
 
-__all__ = ["converts_to", "describe_unit", "format_si", "get_registry", "to_si"]
-
 _ANGLE_SPEED = r"(?:rpm|RPM|Rpm)"
 # Vendor spellings -> pint spellings. Applied to the unit part of a string, in this order.
 _SPELLINGS: tuple[tuple[str, str], ...] = (

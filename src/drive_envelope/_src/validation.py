@@ -13,8 +13,6 @@ from collections.abc import Collection, Iterable
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["check_keys", "keyed_error", "nearest_key"]
-
 
 def nearest_key(key: str, valid: Iterable[str], *, cutoff: float = 0.5) -> str:
     """Return ``" (did you mean 'x'?)"`` for the closest valid key, or ``""`` when none is close.

@@ -13,9 +13,6 @@ import math
 from drive_envelope._src.errors import UnitsError
 from drive_envelope._src.params.table import parameter
 from drive_envelope._src.units import to_si
-from drive_envelope._src.validation import nearest_key  # moved; kept here for its importers
-
-__all__ = ["INFINITY_WORDS", "nearest_key", "read_envelope_value", "read_joint_quantity", "read_quantity"]
 
 INFINITY_WORDS = ("inf", "+inf", "infinity", "+infinity")
 """Spellings of an unbounded value (case-insensitive), e.g. ``max_actuator_velocity = "inf"``."""

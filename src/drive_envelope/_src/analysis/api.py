@@ -29,8 +29,6 @@ from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["EnvelopeSource", "check_log", "check_samples", "fit_curve", "fit_log", "resolve_envelope_source"]
-
 EnvelopeSource = (
     PerformanceEnvelope | JointMapping | Mapping[str, PerformanceEnvelope] | str | os.PathLike[str]
 )

@@ -31,7 +31,6 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.log_model import LogChunk
 from drive_envelope._src.analysis.mapping import JointMapping
 from drive_envelope._src.analysis.report import (
-    DEFAULT_MAX_JOINTS,
     MARGIN_QUANTILES,
     CheckOptions,
     CheckReport,
@@ -44,21 +43,6 @@ from drive_envelope._src.analysis.report import (
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-
-__all__ = [
-    "DEFAULT_MAX_JOINTS",
-    "MARGIN_QUANTILES",
-    "CheckOptions",
-    "CheckReport",
-    "CurveName",
-    "JointCheck",
-    "KeptPoints",
-    "MarginSummary",
-    "Violation",
-    "check_chunks",
-    "histogram_quantile",
-    "margin_scale",
-]
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]

@@ -34,8 +34,6 @@ from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import input_file
 
-__all__ = ["EFFORT_ALIASES", "VELOCITY_ALIASES", "read_curve"]
-
 FloatArray = npt.NDArray[np.float64]
 VELOCITY_ALIASES = ("velocity", "speed", "omega", "v")
 """Column names accepted for the velocity of a curve when the default column name is absent."""

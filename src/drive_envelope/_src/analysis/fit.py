@@ -43,7 +43,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.analysis.fit_estimates import (
     ParameterEstimate,
-    ParameterStatus,
     bootstrap,
     estimates,
 )
@@ -54,8 +53,6 @@ from drive_envelope._src.analysis.fit_rounds import frontier_fit
 from drive_envelope._src.envelope.line_model import Model
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-
-__all__ = ["FitOptions", "FitResult", "LineEvidence", "ParameterEstimate", "ParameterStatus", "fit_samples"]
 
 FloatArray = npt.NDArray[np.float64]
 

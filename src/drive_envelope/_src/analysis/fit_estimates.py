@@ -14,8 +14,6 @@ from drive_envelope._src.envelope.line_model import STANDSTILL, Model, fit_struc
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["ParameterEstimate", "ParameterStatus", "bootstrap", "estimates"]
-
 FloatArray = npt.NDArray[np.float64]
 ParameterStatus = Literal["fitted", "fixed", "unidentified"]
 

@@ -14,16 +14,6 @@ from drive_envelope._src.envelope.line_model import Model
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.params.table import si_unit
 
-__all__ = [
-    "MAX_JSON_RANGES",
-    "SPIKE_RATIO",
-    "WARNING",
-    "LineEvidence",
-    "line_evidence",
-    "sample_ranges",
-    "support_warnings",
-]
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 

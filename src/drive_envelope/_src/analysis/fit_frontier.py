@@ -30,8 +30,6 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["DEFAULT_BAND", "ON_HULL", "Frontier", "clean_hull", "gauge", "hull_chain", "select_frontier"]
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 BoolArray = npt.NDArray[np.bool_]

@@ -7,8 +7,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["MAX_BOOTSTRAP", "MAX_SAMPLE", "MIN_SCALE", "RESOLUTION", "check_count", "fit_samples_input"]
-
 FloatArray = npt.NDArray[np.float64]
 
 MAX_BOOTSTRAP = 10_000

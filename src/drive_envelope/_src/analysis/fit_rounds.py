@@ -27,8 +27,6 @@ from drive_envelope._src.analysis.fit_frontier import (
 from drive_envelope._src.envelope.line_choice import choose_model
 from drive_envelope._src.envelope.line_model import Model, line_residuals
 
-__all__ = ["frontier_fit"]
-
 FloatArray = npt.NDArray[np.float64]
 
 _ROUNDS = 8  # frontier rounds: a central fit widens the band to its noise (it settles in 2 to 4)

@@ -43,8 +43,6 @@ from drive_envelope._src.analysis.report import (
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["FleetRun", "check_fleet", "check_part", "fleet_parts", "is_fleet", "merge_reports"]
-
 LOG_SUFFIXES = (".csv", ".tsv", ".txt", ".parquet", ".pq")
 """File endings a fleet folder's logs have (each also ``.gz`` but Parquet)."""
 _GLOB = set("*?[")

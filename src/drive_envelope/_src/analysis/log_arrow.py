@@ -18,8 +18,6 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
 from drive_envelope._src.errors import InputError
 
-__all__ = ["arrow_joint", "arrow_numeric", "iter_parquet", "iter_table"]
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 

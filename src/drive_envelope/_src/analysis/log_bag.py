@@ -40,8 +40,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["BAG_SUFFIXES", "BagJoint", "BagOptions", "bag_table", "is_bag", "read_bag"]
-
 FloatArray = npt.NDArray[np.float64]
 BAG_SUFFIXES = (".mcap", ".db3")
 """Storage files of a rosbag2 bag (its folder has ``metadata.yaml`` beside them)."""

@@ -25,8 +25,6 @@ from drive_envelope._src.analysis.log_arrow import arrow_joint
 from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
 from drive_envelope._src.errors import InputError
 
-__all__ = ["FIELD_LIMIT", "csv_header", "csv_rows", "iter_csv_arrow", "iter_csv_python"]
-
 FIELD_LIMIT = csv.field_size_limit()
 """Longest field the standard library reads [characters] (131072): a longer one is an error."""
 

@@ -29,16 +29,6 @@ from drive_envelope._src.analysis.log_units import column_scale, find_columns, s
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "ROLES",
-    "CellText",
-    "ColumnPlan",
-    "JointCodes",
-    "LogChunk",
-    "LogColumns",
-    "make_chunk",
-]
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 CellText = Callable[[str, int], "str | None"]

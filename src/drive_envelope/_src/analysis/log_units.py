@@ -23,8 +23,6 @@ from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError, UnitsError
 from drive_envelope._src.units import describe_unit, to_si
 
-__all__ = ["JOINT_TYPES", "ROLE_UNITS", "column_scale", "find_columns", "split_header"]
-
 JOINT_TYPES: tuple[JointType, ...] = ("revolute", "prismatic")
 """Joint types, in the order a unit is tried when the joint type is not known."""
 ROLE_UNITS: dict[str, dict[JointType, str]] = {

@@ -34,16 +34,6 @@ from drive_envelope._src.analysis.log_model import LogChunk, LogColumns
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import input_file
 
-__all__ = [
-    "DEFAULT_CHUNK_ROWS",
-    "LogChunk",
-    "LogColumns",
-    "ReadEngine",
-    "iter_log",
-    "read_log",
-    "source_label",
-]
-
 DEFAULT_CHUNK_ROWS = 1 << 19
 """Rows per chunk: about 16 MiB of float64 columns, so memory stays bounded for any file size."""
 

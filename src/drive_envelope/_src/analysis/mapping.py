@@ -34,8 +34,6 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 
-__all__ = ["JointMapping", "UnusedKey", "is_mapping_file", "load_joint_mapping"]
-
 _MAPPING_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 _SHOWN = 3  # joint names quoted in one message
 

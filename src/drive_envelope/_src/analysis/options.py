@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["add_bag_arguments", "add_column_arguments", "bag_from_args", "columns_from_args"]
-
 
 def add_column_arguments(parser: argparse.ArgumentParser, *, time: bool = True) -> None:
     """Add ``--velocity-column``, ``--effort-column``, ``--joint-column`` (and ``--time-column``)."""

@@ -21,18 +21,6 @@ from drive_envelope._src.analysis.mapping import UnusedKey
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "DEFAULT_MAX_JOINTS",
-    "MARGIN_QUANTILES",
-    "CheckOptions",
-    "CheckReport",
-    "CurveName",
-    "JointCheck",
-    "KeptPoints",
-    "MarginSummary",
-    "Violation",
-]
-
 CurveName = Literal["effort", "velocity"]
 FloatArray = npt.NDArray[np.float64]
 MARGIN_QUANTILES = (0.001, 0.01, 0.05, 0.25, 0.5)

@@ -10,8 +10,6 @@ from drive_envelope._src.analysis.fit_evidence import WARNING, sample_ranges
 from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["check_warnings", "format_check", "format_fit"]
-
 _CURVE_TITLES = {"effort": "eq. 1 effort", "velocity": "eq. 2 velocity"}
 
 

@@ -24,19 +24,6 @@ from typing import NoReturn, TextIO
 
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "Parser",
-    "Progress",
-    "add_force_argument",
-    "add_format_argument",
-    "add_output_argument",
-    "checked_output",
-    "fraction",
-    "integer_at_least",
-    "status",
-    "warn",
-]
-
 PROG = "drive-envelope"
 
 

@@ -33,8 +33,6 @@ from drive_envelope._src.cli.common import PROG, Parser
 from drive_envelope._src.errors import DriveEnvelopeError, InputError
 from drive_envelope._src.version import VERSION
 
-__all__ = ["COMMANDS", "build_parser", "main"]
-
 COMMANDS = (derive, catalog, envelope, simulate, plot, usd, mujoco, check, fit, identify, replay)
 """The subcommand modules, in the order ``--help`` lists them; each has ``register(subparsers)``."""
 

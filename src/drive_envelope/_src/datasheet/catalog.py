@@ -19,16 +19,6 @@ from drive_envelope._src.datasheet.spec import Datasheet
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 
-__all__ = [
-    "CatalogEntry",
-    "SourcedValue",
-    "catalog_entries",
-    "catalog_entry",
-    "catalog_sources",
-    "catalog_text",
-    "load_catalog_datasheet",
-]
-
 _JOINTS = ("revolute", "prismatic")
 
 

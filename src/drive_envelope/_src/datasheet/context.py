@@ -14,8 +14,6 @@ from dataclasses import dataclass, field
 from drive_envelope._src.datasheet.result import Candidate
 from drive_envelope._src.datasheet.spec import Datasheet, ParamSource, Transmission
 
-__all__ = ["DeriveContext", "Input", "build_context", "candidate"]
-
 Input = tuple[str, float | None, str]
 """``(key, SI value or None, SI unit)`` of one input of a formula."""
 

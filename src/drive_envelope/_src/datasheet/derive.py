@@ -20,12 +20,10 @@ from __future__ import annotations
 import math
 
 from drive_envelope._src.datasheet.context import DeriveContext, build_context
-from drive_envelope._src.datasheet.gradient import GRADIENT_METHODS, choose_gradient, line_fit
+from drive_envelope._src.datasheet.gradient import choose_gradient, line_fit
 from drive_envelope._src.datasheet.limits import (
     EFFORT_HINT,
-    EFFORT_LIMITS,
     VELOCITY_HINT,
-    VELOCITY_LIMITS,
     binding,
     effort_candidates,
     limit_source,
@@ -34,12 +32,10 @@ from drive_envelope._src.datasheet.limits import (
 )
 from drive_envelope._src.datasheet.losses import resistance
 from drive_envelope._src.datasheet.plausibility import plausibility_warnings
-from drive_envelope._src.datasheet.result import Candidate, Derivation, Duty, LineFit
-from drive_envelope._src.datasheet.spec import Datasheet, GradientMethod
+from drive_envelope._src.datasheet.result import Candidate, Derivation, Duty
+from drive_envelope._src.datasheet.spec import GRADIENT_METHODS, Datasheet, GradientMethod
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-
-__all__ = ["EFFORT_LIMITS", "VELOCITY_LIMITS", "Candidate", "Derivation", "Duty", "LineFit", "derive"]
 
 
 def derive(

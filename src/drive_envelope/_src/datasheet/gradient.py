@@ -25,10 +25,7 @@ import numpy as np
 from drive_envelope._src.datasheet.context import DeriveContext
 from drive_envelope._src.datasheet.limits import MECHANICAL_LIMITS, value_of
 from drive_envelope._src.datasheet.result import Candidate, LineFit
-from drive_envelope._src.datasheet.spec import GRADIENT_METHODS
 from drive_envelope._src.errors import InputError
-
-__all__ = ["AUTO_ORDER", "GRADIENT_METHODS", "choose_gradient", "line_fit", "motor_gradient"]
 
 AUTO_ORDER = ("datasheet", "resistance", "nominal")
 """The order ``auto`` tries the motor's gradient methods in."""

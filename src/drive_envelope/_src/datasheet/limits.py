@@ -22,17 +22,6 @@ from drive_envelope._src.datasheet.spec import ParamSource
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_value
 
-__all__ = [
-    "EFFORT_LIMITS",
-    "MECHANICAL_LIMITS",
-    "VELOCITY_LIMITS",
-    "binding",
-    "effort_candidates",
-    "limit_source",
-    "value_of",
-    "velocity_candidates",
-]
-
 EFFORT_LIMITS = ("controller_current", "motor_torque", "gear_torque", "output_rating", "output_stall")
 VELOCITY_LIMITS = ("voltage", "motor_speed", "gear_input_speed", "output_rating", "output_no_load")
 MECHANICAL_LIMITS = ("motor_speed", "gear_input_speed")

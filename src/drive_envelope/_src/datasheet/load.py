@@ -30,15 +30,6 @@ from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.units import converts_to, describe_unit, to_si
 from drive_envelope._src.validation import check_keys, nearest_key
 
-__all__ = [
-    "DATASHEET_SECTIONS",
-    "KEY_ALIASES",
-    "SECTION_KEYS",
-    "datasheet_from_mapping",
-    "is_datasheet_mapping",
-    "load_datasheet",
-]
-
 DATASHEET_SECTIONS = ("motor", "gear", "controller", "losses", "output", "screw")
 _TOP_KEYS = ("name", "joint", "description", "sources", *DATASHEET_SECTIONS)
 

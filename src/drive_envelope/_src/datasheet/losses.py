@@ -26,8 +26,6 @@ from drive_envelope._src.datasheet.context import DeriveContext
 from drive_envelope._src.envelope.line_choice import REACH, choose_model
 from drive_envelope._src.errors import InputError
 
-__all__ = ["resistance"]
-
 _ZERO_EFFORT = 0.01
 """A point below this fraction of the curve's largest effort counts as zero effort (a no-load point)."""
 _REACH = REACH

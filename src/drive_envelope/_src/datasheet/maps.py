@@ -16,8 +16,6 @@ from pathlib import Path
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["RobotMap", "robot_map_path", "robot_maps"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class RobotMap:

@@ -11,8 +11,6 @@ from __future__ import annotations
 from drive_envelope._src.datasheet.context import DeriveContext
 from drive_envelope._src.format import format_value
 
-__all__ = ["FACTOR", "LOWEST_EFFICIENCY", "PLAUSIBLE", "SPEED_FACTOR", "plausibility_warnings"]
-
 FACTOR = 2.0
 """Redundant inputs that disagree by more than this factor draw a warning."""
 SPEED_FACTOR = 6.0

@@ -15,8 +15,6 @@ from drive_envelope._src.format import format_table, format_value
 from drive_envelope._src.io.envelope_file import envelope_to_json, envelope_to_toml
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["ENVELOPE_FORMATS", "derivation_report", "envelope_text", "usd_snippet"]
-
 ENVELOPE_FORMATS = ("toml", "envelope-json", "usd-snippet")
 _RAD_PER_S_TO_RPM = 60.0 / (2.0 * math.pi)
 

@@ -14,8 +14,6 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import check_path_name
 
-__all__ = ["EnvelopeLike", "resolve_envelope"]
-
 EnvelopeLike = PerformanceEnvelope | str | os.PathLike[str]
 """A :class:`PerformanceEnvelope`, or the name of an envelope file, a datasheet file or a catalog actuator."""
 

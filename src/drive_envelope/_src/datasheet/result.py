@@ -9,8 +9,6 @@ from typing import Literal
 from drive_envelope._src.datasheet.spec import Datasheet, ParamSource
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 
-__all__ = ["Candidate", "Derivation", "Duty", "LineFit"]
-
 Duty = Literal["peak", "continuous"]
 """Motor torque rating used for maxEffort: ``max_torque`` (peak) or ``continuous_torque``."""
 

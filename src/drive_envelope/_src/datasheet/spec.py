@@ -22,20 +22,6 @@ from typing import TYPE_CHECKING, Literal, get_args
 if TYPE_CHECKING:  # a string annotation only: the CLI reads GRADIENT_METHODS without loading numpy
     from drive_envelope._src.envelope.model import JointType
 
-__all__ = [
-    "ControllerSpec",
-    "Datasheet",
-    "GearboxSpec",
-    "GRADIENT_METHODS",
-    "GradientMethod",
-    "LossesSpec",
-    "MotorDatasheet",
-    "OutputRating",
-    "ParamSource",
-    "ScrewSpec",
-    "Transmission",
-]
-
 GradientMethod = Literal["auto", "resistance", "nominal", "datasheet"]
 GRADIENT_METHODS: tuple[GradientMethod, ...] = get_args(GradientMethod)
 """The speed-torque gradient methods, for the file's ``motor.gradient_method`` and ``--gradient-method``."""

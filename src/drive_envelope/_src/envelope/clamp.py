@@ -67,16 +67,6 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "CLAMP_DRIVE_IMPULSE_ARGS",
-    "PX_EPS_F32",
-    "PX_MAX_F32",
-    "check_time_step",
-    "clamp_drive_impulse",
-    "clamp_effort",
-    "clamp_effort_implicit",
-]
-
 PX_EPS_F32 = float(np.finfo(np.float32).eps)
 """PhysX's absolute epsilon for near-zero denominators, ``FLT_EPSILON = 2^-23``."""
 PX_MAX_F32 = float(np.finfo(np.float32).max)

@@ -24,8 +24,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.clamp import check_time_step
 
-__all__ = ["DriveType", "implicit_drive_effort"]
-
 DriveType = Literal["force", "acceleration"]
 
 

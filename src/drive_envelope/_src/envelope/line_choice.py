@@ -26,8 +26,6 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.line_model import Model, fit_structure, losses, model_cost, scan_split
 from drive_envelope._src.errors import InputError
 
-__all__ = ["ON_LINE", "REACH", "choose_model"]
-
 FloatArray = npt.NDArray[np.float64]
 
 ON_LINE = 0.01

@@ -14,8 +14,6 @@ from collections.abc import Callable
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["fit_line", "line_cost", "top"]
-
 FloatArray = npt.NDArray[np.float64]
 
 _GOLDEN_STEPS = 48  # golden-section iterations: the bracket shrinks by 0.618**48 ~ 1e-10

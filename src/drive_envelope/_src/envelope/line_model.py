@@ -26,17 +26,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.line_fit import fit_line, top
 
-__all__ = [
-    "STANDSTILL",
-    "Model",
-    "Structure",
-    "fit_structure",
-    "line_residuals",
-    "losses",
-    "model_cost",
-    "scan_split",
-]
-
 FloatArray = npt.NDArray[np.float64]
 Structure = Literal["effort", "both", "speed"]
 

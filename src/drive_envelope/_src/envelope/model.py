@@ -33,9 +33,8 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope._src.values import nearest_key, read_quantity
-
-__all__ = ["ENVELOPE_FIELDS", "JointType", "PerformanceEnvelope", "QuadrantCorners", "envelope_from_mapping"]
+from drive_envelope._src.validation import nearest_key
+from drive_envelope._src.values import read_quantity
 
 JointType = Literal["revolute", "prismatic"]
 ENVELOPE_FIELDS = (

@@ -25,8 +25,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-__all__ = ["canonical_envelope"]
-
 
 def canonical_envelope(
     values: Mapping[str, float], unit: str = "N*m"

@@ -43,8 +43,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_text
 from drive_envelope._src.io.paths import input_file
 
-__all__ = ["COLUMNS", "BenchLog", "read_bench_log"]
-
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 

@@ -33,8 +33,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.parameters import ParameterSpace
 from drive_envelope._src.identify.replay import Replay
 
-__all__ = ["SearchOptions", "SearchProgress", "SearchResult", "search"]
-
 FloatArray = npt.NDArray[np.float64]
 _JACOBIAN_STEP = 1e-3  # finite-difference step in the unit cube
 

@@ -35,8 +35,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import PARAMETERS as ENVELOPE_PARAMETERS
 from drive_envelope._src.scenario.spec import Scenario
 
-__all__ = ["DEFAULT_FIT", "IDENTIFIABLE", "ParameterSpace", "parameter_units", "start_values"]
-
 FloatArray = npt.NDArray[np.float64]
 
 _STAND_UNITS: dict[str, tuple[str, str]] = {

@@ -25,8 +25,6 @@ from drive_envelope._src.identify.replay import Replay
 from drive_envelope._src.identify.run import ENGINES, engine_errors, replay_errors
 from drive_envelope._src.identify.stand import IdentifyStand, read_stand
 
-__all__ = ["Playback", "playback_text", "playback_to_dict", "replay_logs", "stand_values"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class Playback:

@@ -27,8 +27,6 @@ from drive_envelope._src.identify.logs import BenchLog
 from drive_envelope._src.identify.stand import IdentifyStand
 from drive_envelope._src.teststand.batch import BatchResult, BatchSolver, BatchStand, simulate_batch
 
-__all__ = ["Replay", "ReplayErrors"]
-
 FloatArray = npt.NDArray[np.float64]
 _DIVERGED = 1e3  # error given to a diverged candidate [rad]: worse than any real fit
 

@@ -33,8 +33,6 @@ from drive_envelope._src.format import format_table
 from drive_envelope._src.identify.parameters import parameter_units
 from drive_envelope._src.identify.run import Identification, LogError, mean_error
 
-__all__ = ["identification_text", "identification_to_dict"]
-
 
 def _number(value: float | None) -> float | str | None:
     if value is None:

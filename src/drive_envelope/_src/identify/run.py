@@ -38,19 +38,6 @@ from drive_envelope._src.scenario.loads import FrictionSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 
-__all__ = [
-    "ENGINES",
-    "Estimate",
-    "Identification",
-    "LogError",
-    "identify",
-    "log_scenario",
-    "engine_errors",
-    "log_schedule",
-    "mean_error",
-    "replay_errors",
-]
-
 FloatArray = npt.NDArray[np.float64]
 ENGINES = ("reference", "physx", "mujoco")
 """Engines the identified model can be replayed in."""

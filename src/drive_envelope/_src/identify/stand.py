@@ -38,8 +38,6 @@ from drive_envelope._src.scenario.spec import Scenario, scenario_from_mapping
 from drive_envelope._src.validation import check_keys
 from drive_envelope._src.values import read_quantity
 
-__all__ = ["IdentifyStand", "StandWarning", "read_stand"]
-
 _OWN_TABLES = ("servo", "bounds")
 
 

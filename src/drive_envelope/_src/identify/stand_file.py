@@ -21,8 +21,6 @@ from drive_envelope._src.identify.stand import IdentifyStand
 from drive_envelope._src.io.atomic import atomic_write_text
 from drive_envelope._src.io.files import format_toml_value
 
-__all__ = ["STAND_SUFFIXES", "save_stand", "stand_to_mapping", "stand_to_toml"]
-
 STAND_SUFFIXES = (".toml", ".json")
 """File name endings an identified stand can be written as."""
 

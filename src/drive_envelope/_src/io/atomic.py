@@ -39,15 +39,6 @@ from types import FrameType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import check_path_name, node_kind
 
-__all__ = [
-    "TEMPORARY_PATTERN",
-    "atomic_path",
-    "atomic_write_bytes",
-    "atomic_write_text",
-    "check_writable",
-    "write_target",
-]
-
 TEMPORARY_PATTERN = ".<name>.*.tmp<suffix>"
 """Name of the temporary file beside the target; only a SIGKILL mid-write can leave one."""
 

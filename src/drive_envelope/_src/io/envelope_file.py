@@ -15,8 +15,6 @@ from drive_envelope._src.io.atomic import atomic_write_text
 from drive_envelope._src.io.files import format_toml_value, read_mapping
 from drive_envelope._src.params.table import si_unit
 
-__all__ = ["envelope_table", "envelope_to_json", "envelope_to_toml", "load_envelope", "save_envelope"]
-
 
 def load_envelope(path: str | os.PathLike[str]) -> PerformanceEnvelope:
     """Read an envelope file (TOML, JSON or YAML; SI numbers or strings with units).

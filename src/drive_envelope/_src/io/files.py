@@ -30,8 +30,6 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["format_toml_value", "read_mapping", "read_text"]
-
 _FLOAT_MAX = sys.float_info.max
 _INF_WORDS = re.compile(r"^[-+]?(?:inf|infinity|\.inf|nan|\.nan)$", re.IGNORECASE)
 

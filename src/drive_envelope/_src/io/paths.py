@@ -18,17 +18,6 @@ from pathlib import Path
 
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "MAX_TEXT_BYTES",
-    "NAME_MAX",
-    "PATH_MAX",
-    "check_path_name",
-    "describe_size",
-    "input_file",
-    "node_kind",
-    "read_input_bytes",
-]
-
 NAME_MAX = 255
 """Longest name of one path component [bytes] (Linux, macOS and Windows file systems)."""
 

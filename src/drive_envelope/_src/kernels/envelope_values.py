@@ -17,8 +17,6 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvel
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.values import read_envelope_value
 
-__all__ = ["envelope_columns", "read_envelope_values"]
-
 
 def _read(value: object, field: str, where: str) -> npt.NDArray[np.float64]:
     """One field as float64: numbers as they are, strings (alone or in a sequence) through the reader."""

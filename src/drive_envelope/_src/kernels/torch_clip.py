@@ -56,15 +56,6 @@ from drive_envelope._src.kernels.torch_ops import (
 if TYPE_CHECKING:
     import torch
 
-__all__ = [
-    "CLIP_RULES",
-    "FUSE_MIN_ELEMENTS",
-    "FreeVelocity",
-    "check_clip",
-    "clip_effort",
-    "end_of_step_effort",
-]
-
 FUSE_MIN_ELEMENTS = 4096
 """``fused=None`` compiles the end-of-step clip from this many elements (RL scale); below, eager."""
 

@@ -23,15 +23,6 @@ from drive_envelope._src.kernels.envelope_values import envelope_columns, read_e
 if TYPE_CHECKING:
     import torch
 
-__all__ = [
-    "EnvelopeTensors",
-    "broadcast_states",
-    "check_params",
-    "records_grad",
-    "resolve_dtype",
-    "state_tensors",
-]
-
 
 def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
     """The torch float dtype to compute in: ``dtype``, else that of the first float tensor, else float32.

@@ -38,14 +38,6 @@ from drive_envelope._src.kernels.torch_envelope import (
 if TYPE_CHECKING:
     import torch
 
-__all__ = [
-    "clamp_drive_impulse",
-    "clamp_effort",
-    "clamp_effort_implicit",
-    "effort_limit",
-    "fused_clamp_drive_impulse",
-]
-
 
 def _device(values: tuple[object, ...]) -> torch.device:
     import torch

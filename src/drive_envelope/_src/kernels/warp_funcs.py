@@ -24,15 +24,6 @@ import warp as wp
 
 from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32
 
-__all__ = [
-    "clamp_drive_impulse_func",
-    "clamp_effort_func",
-    "clamp_effort_implicit_func",
-    "effort_limit_func",
-    "implicit_drive_impulse",
-    "implicit_drive_params",
-]
-
 # no fused multiply-add: dev = x0*r - v0 must round twice, as in PhysX's CPU build and NumPy (NVRTC
 # fuses by default). NaN tests are written x != x: Warp's isnan is a call on the CPU, ten times slower.
 wp.set_module_options({"fuse_fp": False})

@@ -24,15 +24,6 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvel
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
 
-__all__ = [
-    "EnvelopeArrays",
-    "clamp_drive_impulse",
-    "clamp_effort",
-    "clamp_effort_implicit",
-    "copy",
-    "effort_limit",
-]
-
 
 def _warp() -> ModuleType:
     """The ``warp`` module (imported on first use)."""

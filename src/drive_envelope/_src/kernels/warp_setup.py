@@ -15,8 +15,6 @@ import os
 import sys
 from collections.abc import Iterator
 
-__all__ = ["quiet_warp"]
-
 
 @contextlib.contextmanager
 def _native_stderr_dropped() -> Iterator[None]:

@@ -12,8 +12,6 @@ from pathlib import Path
 
 from drive_envelope._src.params.table import PARAMETERS
 
-__all__ = ["GLOSSARY_PATH", "main", "render_glossary"]
-
 GLOSSARY_PATH = Path(__file__).resolve().parents[4] / "docs" / "glossary.md"
 """Where a source checkout keeps the glossary (the test reads it; the generator is told where to write)."""
 

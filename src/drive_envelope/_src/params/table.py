@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["PARAMETERS", "Parameter", "parameter", "si_unit"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class Parameter:

@@ -22,16 +22,6 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
 
-__all__ = [
-    "MAX_EXTENT",
-    "MIN_EXTENT",
-    "BoundaryLine",
-    "CornerPoint",
-    "EnvelopeCurve",
-    "OperatingPoints",
-    "envelope_curve",
-]
-
 MIN_EXTENT = 1e-280
 """Smallest half-width of a plot window [SI]: below it matplotlib widens the axis by itself."""
 MAX_EXTENT = 1e300

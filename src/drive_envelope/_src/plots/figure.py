@@ -28,18 +28,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.plots.curve import MAX_EXTENT, EnvelopeCurve, OperatingPoints, envelope_curve
 
-__all__ = [
-    "FIGURE_SUFFIXES",
-    "MAX_PIXELS",
-    "MAX_PIXELS_PER_SIDE",
-    "EnvelopePlot",
-    "check_figure_path",
-    "check_text",
-    "plain_text",
-    "plot_envelope",
-    "save_figure",
-]
-
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 """File types :func:`save_figure` writes."""
 MAX_PIXELS_PER_SIDE = 65535

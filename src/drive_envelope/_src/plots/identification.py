@@ -19,8 +19,6 @@ from drive_envelope._src.identify.run import Identification, LogError
 from drive_envelope._src.plots.curve import OperatingPoints
 from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
 
-__all__ = ["MAX_ROWS", "identification_figure", "save_identification_figure"]
-
 MAX_ROWS = 4
 """Most logs drawn against time (the operating-point panel shows all)."""
 

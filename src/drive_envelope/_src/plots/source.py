@@ -8,8 +8,6 @@ from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["envelope_from_argument"]
-
 
 def _is_scenario(path: Path) -> bool:
     """A readable mapping file with a ``joint`` table is a test-stand scenario."""

@@ -41,18 +41,6 @@ from drive_envelope._src.scenario.checks import check_finite
 from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec
 from drive_envelope._src.scenario.spec import DriveSpec, LoadSpec, Scenario, SimulationSpec
 
-__all__ = [
-    "AXES",
-    "ChainJoint",
-    "ChainScenario",
-    "Vector3",
-    "chain_from_mapping",
-    "chain_from_scenario",
-    "is_chain_mapping",
-    "load_chain_scenario",
-    "load_stand",
-]
-
 Vector3 = tuple[float, float, float]
 AXES = ("x", "y", "z")
 """Named joint axes: the X, Y or Z axis of the link's frame."""
@@ -308,7 +296,8 @@ def chain_from_mapping(
         InputError: one line naming ``source``, the key, the value and what was expected.
     """
     from drive_envelope._src.scenario import spec as one
-    from drive_envelope._src.scenario.checks import check_keys, read_text, table
+    from drive_envelope._src.scenario.checks import read_text, table
+    from drive_envelope._src.validation import check_keys
 
     check_keys(data, _TOP_KEYS, source, "")
     entries = data.get("joints")
@@ -340,8 +329,9 @@ def _read_chain_joint(
     base_dir: str | os.PathLike[str] | None,
     one: Any,
 ) -> ChainJoint:
-    from drive_envelope._src.scenario.checks import check_keys, choice, quantities, read_text, table, unit_for
+    from drive_envelope._src.scenario.checks import choice, quantities, read_text, table, unit_for
     from drive_envelope._src.scenario.loads import read_friction
+    from drive_envelope._src.validation import check_keys
 
     where = f"joints[{index}]"
     check_keys(entry, _JOINT_KEYS, source, where)

@@ -13,22 +13,6 @@ from collections.abc import Sequence
 
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "IDENTITY",
-    "Matrix3",
-    "Quaternion",
-    "full_inertia",
-    "principal_inertia",
-    "quat_from_matrix",
-    "quat_from_rpy",
-    "quat_multiply",
-    "quat_normalize",
-    "quat_taking_x_to",
-    "quat_to_matrix",
-    "rotate",
-    "unit_vector",
-]
-
 Quaternion = tuple[float, float, float, float]
 Matrix3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
 IDENTITY: Quaternion = (1.0, 0.0, 0.0, 0.0)

@@ -23,8 +23,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.scenario.trajectory import Trajectory, trajectory_format
 
-__all__ = ["ChainTrajectory", "chain_trajectory_to_csv", "save_chain_trajectory"]
-
 FloatArray = npt.NDArray[np.float64]
 _QUANTITIES = ("position", "velocity", "effort")
 

@@ -11,21 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.validation import check_keys
 from drive_envelope._src.values import read_quantity
-
-__all__ = [
-    "MAX_ITERATIONS",
-    "check_finite",
-    "check_int",
-    "check_keys",
-    "choice",
-    "one_solve_tgs_note",
-    "quantities",
-    "read_text",
-    "table",
-    "unit_for",
-]
 
 MAX_ITERATIONS = 255
 """Largest solver iteration count: PhysX stores solver iteration counts in 8 bits."""

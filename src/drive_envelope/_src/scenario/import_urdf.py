@@ -33,8 +33,6 @@ from drive_envelope._src.scenario.chain_frames import (
     rotate,
 )
 
-__all__ = ["urdf_joints"]
-
 _MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
 
 

@@ -21,15 +21,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.scenario.checks import check_finite, check_keys, quantities, unit_for
-
-__all__ = [
-    "STANDARD_GRAVITY",
-    "FrictionSpec",
-    "PendulumSpec",
-    "read_friction",
-    "read_pendulum",
-]
+from drive_envelope._src.scenario.checks import check_finite, quantities, unit_for
+from drive_envelope._src.validation import check_keys
 
 STANDARD_GRAVITY = 9.80665
 """Default gravitational acceleration of a pendulum stand [m/s^2]."""

@@ -7,9 +7,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.values import nearest_key
-
-__all__ = ["SECTIONS", "apply_overrides", "parse_override"]
+from drive_envelope._src.validation import nearest_key
 
 SECTIONS = ("joint", "drive", "envelope", "load", "pendulum", "friction", "simulation")
 """The tables of a scenario file."""

@@ -17,8 +17,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["DriveSchedule"]
-
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 

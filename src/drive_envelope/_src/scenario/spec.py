@@ -29,7 +29,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.scenario.checks import check_finite as _check_finite
 from drive_envelope._src.scenario.checks import check_int as _check_int
-from drive_envelope._src.scenario.checks import check_keys as _check_keys
 from drive_envelope._src.scenario.checks import choice as _choice
 from drive_envelope._src.scenario.checks import quantities as _quantities
 from drive_envelope._src.scenario.checks import read_text as _read_text
@@ -43,24 +42,9 @@ from drive_envelope._src.scenario.loads import (
     read_pendulum,
 )
 from drive_envelope._src.scenario.overrides import SECTIONS as _SECTIONS
-from drive_envelope._src.scenario.overrides import apply_overrides, parse_override
+from drive_envelope._src.scenario.overrides import apply_overrides
 from drive_envelope._src.units import to_si
-
-__all__ = [
-    "MAX_POSITION",
-    "DriveSpec",
-    "FrictionSpec",
-    "JointSpec",
-    "LoadSpec",
-    "PendulumSpec",
-    "Scenario",
-    "SimulationSpec",
-    "SolverType",
-    "apply_overrides",
-    "load_scenario",
-    "parse_override",
-    "scenario_from_mapping",
-]
+from drive_envelope._src.validation import check_keys as _check_keys
 
 SolverType = Literal["pgs", "tgs"]
 

@@ -30,22 +30,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.io.files import read_text
 
-__all__ = [
-    "COLUMNS",
-    "TRAJECTORY_FORMATS",
-    "OperatingLog",
-    "Trajectory",
-    "TrajectoryFormat",
-    "read_operating_log",
-    "read_trajectory",
-    "save_trajectory",
-    "trajectory_format",
-    "trajectory_to_csv",
-    "trajectory_to_json",
-    "write_trajectory_csv",
-    "write_trajectory_json",
-]
-
 COLUMNS = ("time", "position", "velocity", "effort")
 """CSV header, in order."""
 TrajectoryFormat = Literal["csv", "json", "parquet"]

@@ -19,8 +19,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.io.paths import input_file
 
-__all__ = ["METADATA_KEY", "have_parquet", "read_parquet", "write_parquet"]
-
 METADATA_KEY = b"drive_envelope"
 """Schema metadata key of the trajectory's header (JSON)."""
 

@@ -27,8 +27,6 @@ from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.spec import SolverType
 
-__all__ = ["BatchResult", "BatchSolver", "BatchStand", "simulate_batch"]
-
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 

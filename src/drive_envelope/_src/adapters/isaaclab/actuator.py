@@ -33,17 +33,6 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvel
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.values import read_envelope_value
 
-__all__ = [
-    "CFG_NAME",
-    "ENVELOPE_ATTRIBUTES",
-    "envelope_attributes",
-    "inertia_value",
-    "limits_in_si",
-    "resolve_datasheets",
-    "si_value",
-    "time_step",
-]
-
 CFG_NAME = "PerformanceEnvelopeActuatorCfg"
 """The cfg's class name, which every error about a cfg value starts with."""
 

@@ -35,8 +35,6 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.torch_clip import FreeVelocity, check_clip, clip_effort
 from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 
-__all__ = ["PerformanceEnvelopeActuator", "PerformanceEnvelopeActuatorCfg"]
-
 _PUBLIC = "drive_envelope.isaaclab"
 """The classes' ``__module__``: the facade resolves the names to these classes (pickling by reference)."""
 

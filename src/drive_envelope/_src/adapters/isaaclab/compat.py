@@ -33,8 +33,6 @@ import inspect
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["ISAACLAB_2_3", "ISAACLAB_3_0", "IsaacLabApi", "api", "cfg_value"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class IsaacLabApi:

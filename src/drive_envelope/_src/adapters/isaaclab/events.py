@@ -23,8 +23,6 @@ from typing import Any
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["randomize_actuator_envelope", "set_response_from_mass_matrix"]
-
 _OPERATIONS = ("abs", "add", "scale")
 _DISTRIBUTIONS = ("uniform", "log_uniform", "gaussian")
 

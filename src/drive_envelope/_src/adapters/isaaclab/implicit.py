@@ -26,8 +26,6 @@ from typing import Any
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["ImplicitEnvelopeSetup", "author_implicit_envelopes", "check_implicit_actuator"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class ImplicitEnvelopeSetup:

@@ -42,13 +42,6 @@ from drive_envelope._src.adapters.usd.newton_actuator import (
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = [
-    "ENVELOPE_CLAMPING_SCHEMA",
-    "author_envelope_clamping",
-    "build_articulation_cfg",
-    "register_envelope_clamping",
-]
-
 
 @functools.cache
 def register_envelope_clamping() -> type:

@@ -21,13 +21,6 @@ from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.torch_envelope import EnvelopeTensors
 
-__all__ = [
-    "DRIVE_MODEL_ORDER",
-    "drive_model_properties",
-    "envelope_from_drive_model_properties",
-    "write_envelope_to_sim",
-]
-
 DRIVE_MODEL_ORDER = ("speed_effort_gradient", "max_actuator_velocity", "velocity_dependent_resistance")
 """The three envelope values of the PhysX tensor API's drive-model tensor, last axis, in order."""
 

@@ -50,13 +50,6 @@ from drive_envelope._src.kernels.torch_ops import clamp_effort
 if TYPE_CHECKING:
     from mjlab.entity import Entity
 
-__all__ = [
-    "PerformanceEnvelopeActuator",
-    "PerformanceEnvelopeActuatorCfg",
-    "PerformanceEnvelopeImplicitActuator",
-    "StartOfStepEnvelopeActuator",
-]
-
 _CFG = "PerformanceEnvelopeActuatorCfg"
 
 

@@ -21,8 +21,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import torch
 
-__all__ = ["MassMatrixResponse", "model_response"]
-
 
 def model_response(mj_model: Any, dofs: list[int], where: str) -> list[float]:
     """``(M^-1)_ii`` [1/(kg*m^2) or 1/kg] at the model's first keyframe (else ``qpos0``) for ``dofs``."""

@@ -18,8 +18,6 @@ import numpy as np
 
 from drive_envelope._src.adapters.mjwarp.structure import DriveTable
 
-__all__ = ["EnvelopeDrives"]
-
 
 def implicit_damping(disableflags: int, integrator: int) -> bool:
     """Whether MJWarp's step integrates joint damping implicitly (solves with ``M + h*D'``).

@@ -26,8 +26,6 @@ if TYPE_CHECKING:
 
     from drive_envelope._src.adapters.mjwarp.drives import EnvelopeDrives
 
-__all__ = ["attach", "envelope_drives", "put_model", "spec_without_plugin"]
-
 _WHERE = "drive_envelope.mjwarp.put_model"
 
 

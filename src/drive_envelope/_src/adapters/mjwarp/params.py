@@ -23,8 +23,6 @@ from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, drive_dynprm
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["get_envelope", "get_gains", "set_envelope", "set_gains"]
-
 Worlds = int | Sequence[int] | None
 
 

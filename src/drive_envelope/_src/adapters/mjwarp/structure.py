@@ -19,8 +19,6 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["INPUTS", "DriveSpec", "DriveTable", "plugin_drive_specs"]
-
 INPUTS = ("pos", "vel", "ff")
 """The control inputs of a drive, in their canonical order (MuJoCo's ``pid`` actuator)."""
 

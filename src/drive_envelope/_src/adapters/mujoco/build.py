@@ -22,21 +22,6 @@ from pathlib import Path
 from drive_envelope._src.errors import DriveEnvelopeError
 from drive_envelope._src.io.atomic import atomic_write_text
 
-__all__ = [
-    "BUILD_COMMAND",
-    "PLUGIN_SOURCES",
-    "BUILD_INFO",
-    "PluginError",
-    "build_plugin",
-    "cache_key",
-    "current_build",
-    "default_build_dir",
-    "library_name",
-    "main",
-    "mujoco_paths",
-    "plugin_source_dir",
-]
-
 BUILD_COMMAND = "drive-envelope mujoco build-plugin"
 """The command that builds the plugin (quoted in every error about a missing or stale build)."""
 BUILD_INFO = "build-info.json"

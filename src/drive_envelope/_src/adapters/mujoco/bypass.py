@@ -20,8 +20,6 @@ from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["OtherActuator", "bypass_warnings", "is_bypass_warning", "other_actuators"]
-
 # a moment below this fraction of the largest of its row is rounding (spatial tendons, sites)
 _RELATIVE_ZERO = 1e-9
 

@@ -32,8 +32,6 @@ from drive_envelope._src.scenario.chain_frames import (
     rotate,
 )
 
-__all__ = ["mjcf_joints"]
-
 Vector = tuple[float, float, float]
 _Part = tuple[float, Vector, Any]  # mass [kg], centre of mass [m], inertia tensor [kg*m^2], link frame
 

@@ -27,21 +27,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "ExistingActuator",
-    "KeyPlan",
-    "compiled_id",
-    "convert_actuator",
-    "convert_channel",
-    "describe_kind",
-    "feed_forward_motor",
-    "gain_kind",
-    "is_drive",
-    "joint_actuators",
-    "primary_actuator",
-    "update_keyframes",
-]
-
 PLUGIN_NAME = "drive_envelope.envelope"
 
 

@@ -16,8 +16,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["MjDrive"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class MjDrive:

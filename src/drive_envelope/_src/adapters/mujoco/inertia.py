@@ -24,8 +24,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["effective_inertia"]
-
 _WHERE = "effective_inertia"
 
 

@@ -24,8 +24,6 @@ from drive_envelope._src.adapters.mujoco.build import (
     library_name,
 )
 
-__all__ = ["ENV_VAR", "PLUGIN_NAME", "load_plugin", "plugin_library", "plugin_library_path", "plugin_slot"]
-
 PLUGIN_NAME = "drive_envelope.envelope"
 """Name the plugin registers under (``<plugin plugin="drive_envelope.envelope">``)."""
 ENV_VAR = "DRIVE_ENVELOPE_MUJOCO_PLUGIN"

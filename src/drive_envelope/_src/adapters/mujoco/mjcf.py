@@ -39,18 +39,6 @@ from drive_envelope._src.io.paths import input_file
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "Assignment",
-    "EquippedJoint",
-    "apply_drives",
-    "driven_joints",
-    "load_spec",
-    "mujoco_warnings",
-    "read_model",
-    "uses_plugin",
-    "write_mjcf",
-]
-
 PLUGIN_NAME = "drive_envelope.envelope"
 
 

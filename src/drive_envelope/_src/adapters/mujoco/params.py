@@ -35,22 +35,6 @@ from drive_envelope._src.params.table import si_unit
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "DYNPRM_SLOTS",
-    "NO_LIMIT",
-    "PARAM_BOUND",
-    "MjDriveInfo",
-    "DriveRef",
-    "drive_dynprm",
-    "drive_label",
-    "find_drive",
-    "get_envelope",
-    "get_gains",
-    "model_drives",
-    "set_envelope",
-    "set_gains",
-]
-
 DYNPRM_SLOTS = (
     "max_effort",
     "max_actuator_velocity",

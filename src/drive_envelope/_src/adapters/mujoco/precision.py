@@ -22,8 +22,6 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["LOSS_TOLERANCE", "full_precision", "precision_loss", "shortest_numbers"]
-
 LOSS_TOLERANCE = 1e-9
 """Largest relative difference of a written number that is not reported as lost precision."""
 _DIGITS = 17  # enough for every double to read back exactly

@@ -25,15 +25,6 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "DISAGREEMENT",
-    "Rating",
-    "binding_force_ranges",
-    "coupled_driven_joints",
-    "joint_ratings",
-    "rating_lines",
-]
-
 DISAGREEMENT = 0.10
 """A cap this fraction below the model's own rating is reported [1]."""
 

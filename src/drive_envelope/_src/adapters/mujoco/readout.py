@@ -20,8 +20,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["drive_state", "rollout_operating_points"]
-
 FloatArray = npt.NDArray[np.float64]
 
 

@@ -30,16 +30,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = [
-    "MAX_ITERATIONS",
-    "SOLVERS",
-    "SOLVER_NUMERIC",
-    "MjSolver",
-    "SolverName",
-    "get_solver",
-    "set_solver",
-]
-
 SolverName: TypeAlias = Literal["exact", "pgs", "tgs"]
 SOLVERS: tuple[SolverName, ...] = ("exact", "pgs", "tgs")
 """The plugin's solvers, in the order of their code in ``data[0]`` of :data:`SOLVER_NUMERIC`."""

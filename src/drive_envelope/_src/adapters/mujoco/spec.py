@@ -39,8 +39,6 @@ from drive_envelope._src.values import read_quantity
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["INPUTS", "MjDrive", "add_drive", "add_drives", "default_instance", "plugin_config"]
-
 INPUTS = ("pos", "vel", "ff")
 """Control inputs in canonical order: target position, target velocity, feed-forward effort."""
 PLUGIN_NAME = "drive_envelope.envelope"

@@ -53,8 +53,6 @@ from drive_envelope._src.scenario.trajectory import Trajectory
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["MIN_INERTIA", "chain_spec", "simulate", "simulate_chain", "stand_spec"]
-
 MIN_INERTIA = 1e-15
 """Smallest inertia [kg*m^2 or kg] MuJoCo accepts for a moving body (its ``mjMINVAL``)."""
 _WARNINGS = ("mjWARN_INERTIA", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL")

@@ -22,8 +22,6 @@ from typing import Any
 
 from drive_envelope._src.errors import InputError
 
-__all__ = ["BiasForce"]
-
 
 @functools.cache
 def _kernels() -> Any:

@@ -42,9 +42,8 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.values import nearest_key, read_envelope_value
-
-__all__ = ["resolve_envelope_arguments"]
+from drive_envelope._src.validation import nearest_key
+from drive_envelope._src.values import read_envelope_value
 
 
 def resolve_envelope_arguments(args: dict[str, Any]) -> dict[str, float]:

@@ -20,8 +20,6 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.warp_funcs import clamp_effort_func
 
-__all__ = ["ClampingPerformanceEnvelope"]
-
 
 @wp.func
 def _evaluate_envelope_clamp(

@@ -37,8 +37,6 @@ import warp as wp  # noqa: TID253  (a kernel module, imported lazily, as warp_fu
 
 from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_params
 
-__all__ = ["PARAMS", "launch_drive", "shift_positions"]
-
 PARAMS = ("stiffness", "damping", "max_effort", "max_actuator_velocity",
           "velocity_dependent_resistance", "speed_effort_gradient")  # fmt: skip
 """Columns of the kernel's float64 parameter row, SI (the envelope's spec names)."""

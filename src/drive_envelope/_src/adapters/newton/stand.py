@@ -44,8 +44,6 @@ from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["DRIVES", "MAX_VALUE", "MIN_INERTIA", "simulate"]
-
 DRIVES = ("physx", "actuator")
 """How the stand's drive runs: PhysX's PGS/TGS iteration (a Warp kernel), or Newton's actuator stack."""
 MIN_INERTIA = 1e-12

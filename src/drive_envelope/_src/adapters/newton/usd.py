@@ -24,8 +24,6 @@ from typing import Any
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
-__all__ = ["EnvelopeImportWarning", "UsdEnvelopeActuator", "add_envelopes_from_usd"]
-
 _ROTATION_AXES = {"rotX": 0, "rotY": 1, "rotZ": 2}
 _PRISMATIC, _REVOLUTE, _D6 = 0, 1, 6  # newton.JointType values of the joints a drive can be on
 

@@ -16,8 +16,6 @@ from typing import Any
 from drive_envelope._src.adapters.newton.clamp import resolve_envelope_arguments
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
 
-__all__ = ["register_clamping_component"]
-
 _PARSED_KEYS = {"envelope_" + field: field for field in ENVELOPE_FIELDS}
 
 

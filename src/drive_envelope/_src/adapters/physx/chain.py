@@ -33,8 +33,6 @@ from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_frames import rotate
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 
-__all__ = ["EFFORT_SOURCE", "simulate_chain"]
-
 EFFORT_SOURCE = (
     "PhysX jointProjectedForce: the joint force projected on each DOF, which on a chain also carries "
     "the links' weight and motion (ovphysx 0.7 has no read of the drive's own force)"

@@ -41,8 +41,6 @@ if TYPE_CHECKING:
 
     from drive_envelope._src.scenario.chain import ChainJoint, ChainScenario
 
-__all__ = ["CHAIN_PATH", "build_chain_stage", "joint_path", "link_path", "zero_pose"]
-
 CHAIN_PATH = "/World/chain"
 """Prim path of the articulation root."""
 _BASE = f"{CHAIN_PATH}/base"

@@ -41,8 +41,6 @@ from drive_envelope._src.adapters.physx.scene import ARTICULATION_PATH, JOINT_PA
 from drive_envelope._src.errors import DriveEnvelopeError, InputError
 from drive_envelope._src.kernels.warp_setup import quiet_warp
 
-__all__ = ["PhysxJob", "PhysxResult", "cache_folder", "inspect_drives", "run_jobs"]
-
 _INSPECTED = {
     "max_force": "jointMaxForce",
     "stiffness": "jointStiffness",

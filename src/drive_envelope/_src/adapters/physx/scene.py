@@ -37,8 +37,6 @@ if TYPE_CHECKING:
 
     from drive_envelope._src.scenario.spec import Scenario
 
-__all__ = ["ARTICULATION_PATH", "JOINT_PATH", "LINK_PATH", "build_teststand_stage"]
-
 ARTICULATION_PATH = "/World/stand"
 """Prim path of the articulation root (the tensor-binding pattern)."""
 LINK_PATH = "/World/stand/link"

@@ -32,8 +32,6 @@ from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["EFFORT_SOURCE", "EFFORT_SOURCE_FRICTION", "simulate", "simulate_many"]
-
 EFFORT_SOURCE = (
     "PhysX jointProjectedForce: the joint force projected on the DOF, which is the drive + applied "
     "effort when the link has its centre of mass on the joint axis and no armature; a pendulum's "

@@ -21,17 +21,15 @@ from typing import TYPE_CHECKING
 
 from drive_envelope._src.adapters.usd.joint_map import (
     JointMap,
-    keyed_error,
     match_joints,
     resolve_envelopes,
 )
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.validation import keyed_error
 
 if TYPE_CHECKING:
     from pxr import Usd
-
-__all__ = ["AppliedDrive", "Assignment", "apply_envelopes", "joint_paths", "map_assignments", "rating_report"]
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)

@@ -40,8 +40,6 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["articulated_joints"]
-
 _WORLD_WEIGHT, _EXCLUDED_WEIGHT, _LINK_WEIGHT = 100000, 1000, 100  # finalizeArticulations' weights
 
 

@@ -39,20 +39,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = [
-    "ENVELOPE_API",
-    "has_envelope_api",
-    "model_rating",
-    "DriveRecord",
-    "EnvelopeAuthoringWarning",
-    "author_envelope",
-    "joint_kind",
-    "list_drives",
-    "read_envelope",
-    "resolve_joint",
-    "write_envelope",
-]
-
 ENVELOPE_API = "PhysxDrivePerformanceEnvelopeAPI"
 """Schema name of the multiple-apply envelope API."""
 _DRIVE_API = "PhysicsDriveAPI"

@@ -28,8 +28,6 @@ from drive_envelope._src.errors import InputError
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = ["EditSite", "edit_site"]
-
 _MAX_DEPTH = 16  # nested instancing levels followed before giving up
 
 

@@ -52,22 +52,7 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.validation import keyed_error, nearest_key  # keyed_error: re-exported for apply
-
-__all__ = [
-    "JointMap",
-    "MapEntry",
-    "MapMatch",
-    "MappedJoint",
-    "case_hint",
-    "glob_hint",
-    "keyed_error",
-    "match_joints",
-    "read_entry",
-    "read_map",
-    "read_map_table",
-    "resolve_envelopes",
-]
+from drive_envelope._src.validation import nearest_key  # keyed_error: re-exported for apply
 
 _FILE_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
 _SHOWN = 3  # joint names quoted in one message

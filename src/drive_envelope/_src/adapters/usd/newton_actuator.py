@@ -21,8 +21,6 @@ from typing import Any
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
 from drive_envelope._src.errors import InputError
 
-__all__ = ["ENVELOPE_CLAMPING_SCHEMA", "SCHEMA_DIR", "apply_envelope_clamping", "register_schema"]
-
 ENVELOPE_CLAMPING_SCHEMA = "DriveEnvelopeClampingAPI"
 SCHEMA_DIR = Path(__file__).resolve().parent / "newton_schema"
 # USD attribute per spec field, in the newton: namespace (the one Newton's parser reads)

@@ -31,8 +31,6 @@ from drive_envelope._src.errors import DriveEnvelopeError, InputError
 if TYPE_CHECKING:
     from pxr import Sdf, Usd
 
-__all__ = ["WRITABLE_SUFFIXES", "check_output_name", "save_stage"]
-
 WRITABLE_SUFFIXES = (".usd", ".usda", ".usdc")
 """File names USD writes (a ``.usdz`` package is read-only to USD)."""
 _SHOWN = 3

@@ -14,8 +14,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["ANGULAR_INSTANCES", "LINEAR_INSTANCES", "StageUnits", "is_angular"]
-
 ANGULAR_INSTANCES = ("angular", "rotX", "rotY", "rotZ")
 """Drive instances whose values USD stores per degree."""
 LINEAR_INSTANCES = ("linear", "transX", "transY", "transZ")

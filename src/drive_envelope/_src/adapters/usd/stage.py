@@ -30,16 +30,6 @@ from drive_envelope._src.io.paths import input_file
 if TYPE_CHECKING:
     from pxr import Usd
 
-__all__ = [
-    "UsdStageWarning",
-    "clean_usd_message",
-    "open_overlay",
-    "open_stage",
-    "register_schemas",
-    "stage_units",
-    "usd_diagnostics",
-]
-
 _READABLE = (".usd", ".usda", ".usdc", ".usdz")
 # stage metadata a layer over an asset must repeat: USD reads stage metadata from the root layer only
 # (a sublayer's metersPerUnit is ignored), so without these a metre asset would compose as centimetres

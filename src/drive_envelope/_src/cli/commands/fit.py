@@ -114,7 +114,8 @@ def _fixed(items: list[str], joint: str) -> dict[str, float]:
     from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
     from drive_envelope._src.errors import InputError
     from drive_envelope._src.params.table import si_unit
-    from drive_envelope._src.values import nearest_key, read_quantity
+    from drive_envelope._src.validation import nearest_key
+    from drive_envelope._src.values import read_quantity
 
     fixed = {}
     for item in items:

@@ -33,18 +33,6 @@ if TYPE_CHECKING:
     from drive_envelope._src.scenario.spec import Scenario
     from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = [
-    "ENGINES",
-    "ENGINE_EXTRAS",
-    "LOADS",
-    "MAX_STEPS",
-    "ProgressCallback",
-    "check_steps",
-    "engine_module",
-    "engine_names",
-    "simulate",
-]
-
 MAX_STEPS = 10**8
 """Most time steps one run takes unless ``max_steps`` (``--max-steps``) raises it: 3.2 GB of trajectory."""
 

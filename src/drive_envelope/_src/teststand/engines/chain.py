@@ -51,8 +51,6 @@ from drive_envelope._src.teststand.engines.solver_terms import (
     implicit_drive_desc,
 )
 
-__all__ = ["simulate_chain", "step_chain"]
-
 FloatArray = npt.NDArray[np.float64]
 _PROGRESS_EVERY = 1024
 

@@ -20,8 +20,6 @@ import numpy.typing as npt
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_frames import quat_to_matrix
 
-__all__ = ["ChainModel", "Kinematics"]
-
 FloatArray = npt.NDArray[np.float64]
 
 

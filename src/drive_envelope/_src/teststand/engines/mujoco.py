@@ -12,8 +12,6 @@ from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["LOADS", "simulate", "simulate_chain"]
-
 LOADS = ("pendulum", "friction", "armature")
 """The bench loads this engine represents (see :mod:`drive_envelope._src.teststand.engines`)."""
 

@@ -12,8 +12,6 @@ from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 from drive_envelope._src.teststand.engines import ProgressCallback
 
-__all__ = ["LOADS", "simulate"]
-
 LOADS = ("pendulum", "armature")
 """The bench loads this engine represents (``[friction]`` has no Featherstone counterpart)."""
 

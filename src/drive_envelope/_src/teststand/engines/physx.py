@@ -16,8 +16,6 @@ from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
-__all__ = ["LOADS", "drive_efforts", "simulate", "simulate_chain", "simulate_many"]
-
 LOADS = ("pendulum", "friction", "armature")
 """The bench loads this engine represents (see :mod:`drive_envelope._src.teststand.engines`)."""
 

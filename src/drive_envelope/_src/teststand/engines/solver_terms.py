@@ -20,8 +20,6 @@ from dataclasses import dataclass
 
 from drive_envelope._src.envelope.drive import DriveType
 
-__all__ = ["ImplicitDriveDesc", "compute_drive_impulse", "compute_friction_impulse", "implicit_drive_desc"]
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class ImplicitDriveDesc:
