@@ -13,6 +13,7 @@ Tolerances used (and stated in docs/analysis.md):
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drive_envelope import PerformanceEnvelope, load_envelope, save_envelope
-from drive_envelope.analysis import FitOptions, fit_curve, fit_log, fit_samples
+from drive_envelope._src.analysis.text import format_fit
+from drive_envelope.analysis import FitOptions, ParameterEstimate, fit_curve, fit_log, fit_samples
 from drive_envelope.errors import InputError
 
 TRUTH = PerformanceEnvelope(
@@ -274,3 +276,21 @@ def test_fixed_parameters_hold_on_a_speed_torque_line() -> None:
         velocity, effort, FitOptions(fixed={"velocity_dependent_resistance": 0.5}, bootstrap=0)
     ).envelope
     assert math.isinf(loss.max_actuator_velocity) and loss.max_effort == pytest.approx(5.0, rel=1e-9)
+
+
+def test_a_degenerate_interval_beside_a_std_is_explained() -> None:
+    """A std of 0.00577 beside [37.6991, 37.6991]: most resamples agree exactly; say so.
+
+    Issue 23, item 12.
+    """
+    velocity = [0.0, 10.0, 20.0, 30.0, 37.6991]
+    effort = [4.0, 3.0, 2.0, 1.0, 0.0]
+    result = fit_samples(velocity, effort, options=FitOptions(bootstrap=0))
+    estimate = ParameterEstimate(
+        name="max_actuator_velocity", value=37.6991, unit="rad/s", status="fitted", std=0.00577,
+        interval=(37.69911184, 37.69911185),  # equal to the 6 digits shown, not bit for bit
+    )  # fmt: skip
+    others = [p for p in result.parameters if p.name != "max_actuator_velocity"]
+    text = format_fit(replace(result, parameters=(*others, estimate)))
+    assert "37.6991 (>= 95 % of resamples; std from the rest)" in text
+    assert "[37.6991, 37.6991]" not in text

@@ -17,6 +17,7 @@ import pytest
 
 from drive_envelope._src.analysis.api import fit_curve
 from drive_envelope._src.analysis.fit import FitOptions
+from drive_envelope._src.analysis.text import format_fit
 from drive_envelope._src.envelope.line_model import fit_structure
 
 RPM = math.pi / 30.0  # rad/s per rev/min
@@ -56,3 +57,23 @@ def test_a_held_max_effort_brings_the_loss_slope_down_for_samples_past_the_split
     assert model.resistance == pytest.approx(0.025)
     free = fit_structure(x, y, 0.0, {}, "both", 3.0)  # free: the cap moves out instead
     assert free.resistance == pytest.approx(0.1) and free.effort == pytest.approx(11.5)
+
+
+CUT_CURVE = "speed [rpm],torque [N*m]\n0,4\n1000,3.5\n2000,3.0\n3000,2.4\n3500,1.0\n3600,0\n"
+
+
+def test_a_fixed_speed_that_cuts_points_off_is_said_not_every_point_contained(tmp_path: Path) -> None:
+    """``fit`` output that contradicted itself (issue 23, item 12).
+
+    The curve (0 rpm, 4 N*m) ... (3600 rpm, 0 N*m) held at max_actuator_velocity = 3000 rpm
+    (314.159 rad/s) leaves the 3500 and 3600 rpm points outside: 2, counted by hand.
+    """
+    path = tmp_path / "diagram.csv"
+    path.write_text(CUT_CURVE, encoding="utf-8")
+    result = fit_curve(path, options=FitOptions(fixed={"max_actuator_velocity": 3000 * math.pi / 30}))
+    assert result.samples_outside == 2
+    text = format_fit(result)
+    assert "every point contained" not in text
+    assert "2 point(s) outside, cut off by the fixed max_actuator_velocity = 314.159 (SI)" in text
+    free = fit_curve(path)
+    assert free.samples_outside == 0 and "every point contained" in format_fit(free)
