@@ -7,6 +7,7 @@ expected value computed by hand in the test.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -16,7 +17,17 @@ import pytest
 
 from drive_envelope._src.cli.main import main
 from drive_envelope._src.datasheet.derive import derive
-from drive_envelope._src.datasheet.load import datasheet_from_mapping, load_datasheet
+from drive_envelope._src.datasheet.load import (
+    _FIXED,
+    _LINEAR,
+    _ROTARY,
+    DATASHEET_SECTIONS,
+    KEY_ALIASES,
+    SECTION_CLASSES,
+    SECTION_KEYS,
+    datasheet_from_mapping,
+    load_datasheet,
+)
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope.errors import InputError
 
@@ -401,3 +412,41 @@ def test_the_smaller_of_stall_and_cap_binds() -> None:
     assert result.envelope.max_effort == 1.5
     assert result.max_effort_limited_by == "output_rating"
     assert result.envelope.speed_effort_gradient == pytest.approx(6.0 / 2.0, rel=1e-15)
+
+
+def _fields_without_a_key(section_class: type) -> list[str]:
+    """The fields of a section class that neither carry a file rule nor say they are not a file key."""
+    return [
+        item.name
+        for item in dataclasses.fields(section_class)
+        if "kind" not in item.metadata and item.metadata.get("file_key", True)
+    ]
+
+
+def test_section_fields_and_file_keys_are_one_table() -> None:
+    """Every section field is a file key (or says it is not one), every file key is a field, and
+    every rule is one the reader can read: the file format and the dataclasses cannot drift."""
+    readable = {*_ROTARY, *_LINEAR, *_FIXED, "enum", "points", "lead"}
+    assert list(SECTION_CLASSES) == list(SECTION_KEYS) == list(DATASHEET_SECTIONS)
+    for section, section_class in SECTION_CLASSES.items():
+        assert _fields_without_a_key(section_class) == [], f"[{section}] fields without a file rule"
+        names = {item.name for item in dataclasses.fields(section_class)}
+        for key, (kind, bound, side) in SECTION_KEYS[section].items():
+            assert key in names, f"{section}.{key} is not a field of {section_class.__name__}"
+            assert kind in readable, f"{section}.{key}: kind {kind!r}"
+            assert bound in (">0", ">=0", "(0,1]", ""), f"{section}.{key}: bound {bound!r}"
+            assert side in ("motor", "joint"), f"{section}.{key}: side {side!r}"
+        for alias, target in KEY_ALIASES.get(section, {}).items():
+            assert target in SECTION_KEYS[section], f"{section}.{alias} -> {target}"
+
+
+def test_a_field_without_a_file_rule_is_found() -> None:
+    """The check above fails on a section class given a field without a rule."""
+
+    @dataclasses.dataclass(frozen=True)
+    class Drifted:
+        ruled: float | None = dataclasses.field(default=None, metadata={"kind": "torque"})
+        not_a_key: str = dataclasses.field(default="", metadata={"file_key": False})
+        unruled: float | None = None
+
+    assert _fields_without_a_key(Drifted) == ["unruled"]

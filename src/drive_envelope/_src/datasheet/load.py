@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 from drive_envelope._src.datasheet.spec import (
@@ -30,7 +30,16 @@ from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.units import converts_to, describe_unit, to_si
 from drive_envelope._src.validation import check_keys, nearest_key
 
-DATASHEET_SECTIONS = ("motor", "gear", "controller", "losses", "output", "screw")
+SECTION_CLASSES: dict[str, type] = {
+    "motor": MotorDatasheet,
+    "gear": GearboxSpec,
+    "controller": ControllerSpec,
+    "losses": LossesSpec,
+    "output": OutputRating,
+    "screw": ScrewSpec,
+}
+"""Each datasheet section and the class it is read into, in file order."""
+DATASHEET_SECTIONS = tuple(SECTION_CLASSES)
 _TOP_KEYS = ("name", "joint", "description", "sources", *DATASHEET_SECTIONS)
 
 # SI unit of each kind of quantity, for rotary motor data, linear motor data and the joint side.
@@ -54,54 +63,23 @@ _LINEAR = {
 }
 _FIXED = {"current": "A", "voltage": "V", "ohm": "ohm", "fraction": "dimensionless", "ratio": "dimensionless"}
 
-# section -> key -> (kind, rule, side). rule: ">0", ">=0" or "(0,1]". side: "motor" (motor units,
-# linear for a linear motor) or "joint" (joint units).
+# section -> key -> (kind, rule, side), derived from the rules on the section classes' fields (see
+# spec._rule): one table, so a field and its file key cannot drift apart. rule: ">0", ">=0" or "(0,1]".
+# side: "motor" (motor units, linear for a linear motor) or "joint" (joint units).
 _Rule = tuple[str, str, str]
+
+
+def _file_keys(section_class: type) -> dict[str, _Rule]:
+    """The file keys of one section class: each field with a rule, under its own name."""
+    return {
+        item.name: (item.metadata["kind"], item.metadata["bound"], item.metadata["side"])
+        for item in fields(section_class)
+        if "kind" in item.metadata
+    }
+
+
 SECTION_KEYS: dict[str, dict[str, _Rule]] = {
-    "motor": {
-        "torque_constant": ("torque_constant", ">0", "motor"),
-        "speed_constant": ("speed_constant", ">0", "motor"),
-        "back_emf_constant": ("back_emf_constant", ">0", "motor"),
-        "terminal_resistance": ("ohm", ">0", "motor"),
-        "max_torque": ("torque", ">0", "motor"),
-        "continuous_torque": ("torque", ">0", "motor"),
-        "max_speed": ("speed", ">0", "motor"),
-        "no_load_speed": ("speed", ">0", "motor"),
-        "nominal_speed": ("speed", ">0", "motor"),
-        "nominal_torque": ("torque", ">0", "motor"),
-        "speed_torque_gradient": ("gradient", ">0", "motor"),
-        "gradient_method": ("enum", "", "motor"),
-    },
-    "gear": {
-        "ratio": ("ratio", ">0", "motor"),
-        "efficiency": ("fraction", "(0,1]", "motor"),
-        "max_torque": ("torque", ">0", "motor"),
-        "max_input_speed": ("speed", ">0", "motor"),
-    },
-    "controller": {
-        "max_current": ("current", ">0", "motor"),
-        "max_voltage": ("voltage", ">0", "motor"),
-        "modulation": ("fraction", "(0,1]", "motor"),
-    },
-    "losses": {
-        "velocity_dependent_resistance": ("resistance_joint", ">=0", "joint"),
-        "operating_points": ("points", "", "motor"),
-    },
-    "output": {
-        "max_effort": ("torque", ">0", "joint"),
-        "max_velocity": ("speed", ">0", "joint"),
-        "velocity_at_max_effort": ("speed", ">=0", "joint"),
-        "speed_effort_gradient": ("gradient", ">0", "joint"),
-        "velocity_dependent_resistance": ("resistance_joint", ">=0", "joint"),
-        "stall_effort": ("torque", ">0", "joint"),
-        "no_load_velocity": ("speed", ">0", "joint"),
-        "nominal_effort": ("torque", ">0", "joint"),
-        "nominal_velocity": ("speed", ">0", "joint"),
-    },
-    "screw": {
-        "lead": ("lead", ">0", "motor"),
-        "efficiency": ("fraction", "(0,1]", "motor"),
-    },
+    section: _file_keys(section_class) for section, section_class in SECTION_CLASSES.items()
 }
 _REQUIRED = {"gear": "ratio", "screw": "lead"}
 KEY_ALIASES: dict[str, dict[str, str]] = {

@@ -7,7 +7,8 @@ joint-side values, and :class:`Transmission` is the only place where one becomes
 Every field is an SI float or ``None`` when the datasheet does not give it. ``None`` is never
 guessed: a candidate limit whose inputs are absent is reported as missing. Defaults (gear efficiency
 1.0, controller modulation 0.9) are applied by :func:`~drive_envelope._src.datasheet.derive.derive`,
-which records them as such.
+which records them as such. Each section field also carries its file key's rule (kind of quantity,
+bound, side) in its metadata: the reader's ``SECTION_KEYS`` is derived from these fields.
 
 Units depend on the motor: a rotary motor uses N*m, rad/s, N*m/A, rad/s/V; a linear motor (a
 prismatic joint without ``[screw]``) uses N, m/s, N/A, (m/s)/V. The brackets below give both.
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, get_args
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 if TYPE_CHECKING:  # a string annotation only: the CLI reads GRADIENT_METHODS without loading numpy
     from drive_envelope._src.envelope.model import JointType
@@ -31,34 +32,58 @@ ParamSource = Literal["datasheet", "derived", "default", "user"]
 """Where a value came from: the datasheet file, a formula, a documented default, or the user
 (a command-line override)."""
 
+Side = Literal["motor", "joint"]
+"""Which units a file value takes: ``"motor"`` (linear for a linear motor) or ``"joint"``."""
+
+
+def _rule(kind: str, bound: str, side: Side) -> dict[str, str]:
+    """A section field's file rule, the one table the reader derives ``SECTION_KEYS`` from.
+
+    Args:
+        kind: The quantity (``"torque"``, ``"speed"``, ...; ``"enum"``, ``"points"`` and ``"lead"``
+            have their own readers).
+        bound: ``">0"``, ``">=0"``, ``"(0,1]"`` or ``""`` (not a number).
+        side: Motor-side or joint-side units.
+
+    Each field is read from the file key of its own name; a field that is not a file key would say
+    so with ``metadata={"file_key": False}`` (none is, today).
+    """
+    return {"kind": kind, "bound": bound, "side": side}
+
+
+def _key(kind: str, bound: str, side: Side) -> Any:
+    """An optional section field, ``None`` when the file omits it, with its file rule."""
+    # Any: the field's own annotation gives its type, as with dataclasses.field
+    return field(default=None, metadata=_rule(kind, bound, side))
+
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class MotorDatasheet:
     """The motor, motor side (before the gear), as its datasheet prints it."""
 
-    torque_constant: float | None = None
+    torque_constant: float | None = _key("torque_constant", ">0", "motor")
     """k_t [N*m/A or N/A]; taken as printed (no rms/peak or phase conversion)."""
-    speed_constant: float | None = None
+    speed_constant: float | None = _key("speed_constant", ">0", "motor")
     """k_v [(rad/s)/V or (m/s)/V]."""
-    back_emf_constant: float | None = None
+    back_emf_constant: float | None = _key("back_emf_constant", ">0", "motor")
     """k_e [V*s/rad or V*s/m]; gives k_v = 1/k_e. Exclusive with ``speed_constant``."""
-    terminal_resistance: float | None = None
+    terminal_resistance: float | None = _key("ohm", ">0", "motor")
     """R_mot, terminal (phase-to-phase) resistance [ohm]."""
-    max_torque: float | None = None
+    max_torque: float | None = _key("torque", ">0", "motor")
     """tau_M,max for peak duty [N*m or N]."""
-    continuous_torque: float | None = None
+    continuous_torque: float | None = _key("torque", ">0", "motor")
     """tau_M,max for continuous duty [N*m or N]."""
-    max_speed: float | None = None
+    max_speed: float | None = _key("speed", ">0", "motor")
     """n_M,max, mechanical speed limit [rad/s or m/s]."""
-    no_load_speed: float | None = None
+    no_load_speed: float | None = _key("speed", ">0", "motor")
     """n_0 [rad/s or m/s]."""
-    nominal_speed: float | None = None
+    nominal_speed: float | None = _key("speed", ">0", "motor")
     """n_N [rad/s or m/s]; below ``no_load_speed``."""
-    nominal_torque: float | None = None
+    nominal_torque: float | None = _key("torque", ">0", "motor")
     """tau_N [N*m or N]."""
-    speed_torque_gradient: float | None = None
+    speed_torque_gradient: float | None = _key("gradient", ">0", "motor")
     """Speed-torque gradient as printed [(rad/s)/(N*m) or (m/s)/N]."""
-    gradient_method: GradientMethod = "auto"
+    gradient_method: GradientMethod = field(default="auto", metadata=_rule("enum", "", "motor"))
     """Which motor gradient to use: ``auto`` takes the first of datasheet, resistance, nominal whose
     inputs exist."""
 
@@ -67,13 +92,13 @@ class MotorDatasheet:
 class GearboxSpec:
     """The gear between motor and joint (or screw)."""
 
-    ratio: float
+    ratio: float = field(metadata=_rule("ratio", ">0", "motor"))
     """i_G = motor speed / gear output speed [1]; > 1 for a reducer."""
-    efficiency: float | None = None
+    efficiency: float | None = _key("fraction", "(0,1]", "motor")
     """eta_G in (0, 1] [1]; ``None``: 1.0 is used, with a note."""
-    max_torque: float | None = None
+    max_torque: float | None = _key("torque", ">0", "motor")
     """tau_G,max at the gear output [N*m or N]."""
-    max_input_speed: float | None = None
+    max_input_speed: float | None = _key("speed", ">0", "motor")
     """n_G,in,max at the gear input [rad/s or m/s]."""
 
 
@@ -81,11 +106,11 @@ class GearboxSpec:
 class ControllerSpec:
     """The motor controller (drive electronics)."""
 
-    max_current: float | None = None
+    max_current: float | None = _key("current", ">0", "motor")
     """I_C,max [A]."""
-    max_voltage: float | None = None
+    max_voltage: float | None = _key("voltage", ">0", "motor")
     """V_max, supply voltage [V]."""
-    modulation: float | None = None
+    modulation: float | None = _key("fraction", "(0,1]", "motor")
     """mu_C in (0, 1] [1]; ``None``: 0.9 is used, with a note."""
 
 
@@ -93,9 +118,9 @@ class ControllerSpec:
 class LossesSpec:
     """Speed-dependent losses."""
 
-    velocity_dependent_resistance: float | None = None
+    velocity_dependent_resistance: float | None = _key("resistance_joint", ">=0", "joint")
     """k_tau_v at the joint, when known directly [N*m*s/rad or N*s/m]."""
-    operating_points: tuple[tuple[float, float], ...] | None = None
+    operating_points: tuple[tuple[float, float], ...] | None = _key("points", "", "motor")
     """Motor-side ``(speed [rad/s or m/s], max torque [N*m or N])`` points from an operating
     diagram, or None; fitted by least squares when no direct value is given."""
 
@@ -113,26 +138,26 @@ class OutputRating:
     ``(no_load_velocity - nominal_velocity) / nominal_effort`` (the spec's nominal method).
     """
 
-    max_effort: float | None = None
+    max_effort: float | None = _key("torque", ">0", "joint")
     """Peak output effort, a cap [N*m or N]."""
-    max_velocity: float | None = None
+    max_velocity: float | None = _key("speed", ">0", "joint")
     """Output velocity cap [rad/s or m/s]."""
-    velocity_at_max_effort: float | None = None
+    velocity_at_max_effort: float | None = _key("speed", ">=0", "joint")
     """Output velocity at ``max_effort`` [rad/s or m/s]; gives the gradient
     ``(max_velocity - velocity_at_max_effort) / max_effort``."""
-    speed_effort_gradient: float | None = None
+    speed_effort_gradient: float | None = _key("gradient", ">0", "joint")
     """Output speed-effort gradient as printed [(rad/s)/(N*m) or (m/s)/N]."""
-    velocity_dependent_resistance: float | None = None
+    velocity_dependent_resistance: float | None = _key("resistance_joint", ">=0", "joint")
     """k_tau_v at the output [N*m*s/rad or N*s/m]."""
-    stall_effort: float | None = None
+    stall_effort: float | None = _key("torque", ">0", "joint")
     """Stall torque or force: the effort at zero speed, the line's effort end [N*m or N]. Read from
     ``stall_effort``, ``stall_torque`` or ``stall_force``."""
-    no_load_velocity: float | None = None
+    no_load_velocity: float | None = _key("speed", ">0", "joint")
     """No-load output velocity: the speed at zero effort, the line's speed end [rad/s or m/s]. Read
     from ``no_load_velocity`` or ``no_load_speed``."""
-    nominal_effort: float | None = None
+    nominal_effort: float | None = _key("torque", ">0", "joint")
     """Rated (continuous) output effort [N*m or N]; the effort cap for ``--duty continuous``."""
-    nominal_velocity: float | None = None
+    nominal_velocity: float | None = _key("speed", ">0", "joint")
     """Output velocity at ``nominal_effort`` on the speed-effort line [rad/s or m/s]."""
 
     def rating_gradient(self) -> tuple[float, str] | None:
@@ -169,9 +194,9 @@ class OutputRating:
 class ScrewSpec:
     """A lead screw or ball screw turning the gear output into linear travel (prismatic joints)."""
 
-    lead: float
+    lead: float = field(metadata=_rule("lead", ">0", "motor"))
     """Travel per revolution [m]."""
-    efficiency: float | None = None
+    efficiency: float | None = _key("fraction", "(0,1]", "motor")
     """eta_S in (0, 1] [1]; ``None``: 1.0."""
 
 
