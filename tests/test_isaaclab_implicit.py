@@ -15,6 +15,7 @@ import math
 import re
 import warnings
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -358,3 +359,43 @@ def test_author_implicit_envelopes_refuses_a_bad_map_and_writes_nothing(tmp_path
             REPO / "examples" / "usd" / "robot.usda", bad, tmp_path / "out.usda", stiffness=None, damping=None
         )
     assert not (tmp_path / "out.usda").exists()
+
+
+@pytest.mark.isaaclab
+@pytest.mark.filterwarnings("ignore:`torch.jit.script` is deprecated:FutureWarning")
+def test_check_implicit_actuator_findings() -> None:
+    """A partial effort_limit_sim dict (maxForce 0), an explicit cfg, a string joint_names_expr.
+
+    Issue 23 item 13 on Isaac Lab 2.3 (the same cases on Isaac Lab 3.0: tests/isaaclab3).
+    """
+    from isaaclab.actuators import ActuatorNetMLPCfg, ImplicitActuatorCfg
+
+    from drive_envelope.isaaclab import check_implicit_actuator
+
+    envelopes = {
+        "FL_calf_joint": de.PerformanceEnvelope(max_effort=45.43),
+        "FL_hip_joint": de.PerformanceEnvelope(max_effort=23.7),
+    }
+    partial = ImplicitActuatorCfg(
+        joint_names_expr=[".*"], stiffness=None, damping=None, effort_limit_sim={".*_calf_joint": 45.43}
+    )
+    assert check_implicit_actuator(partial, envelopes) == [
+        "effort_limit_sim names no value for joint 'FL_hip_joint': Isaac Lab writes 0 as its max force, "
+        "which turns the drive off (the envelope's max_effort is 23.7; name every joint, or leave it None)"
+    ]
+    explicit = ActuatorNetMLPCfg(
+        joint_names_expr=[".*"],
+        network_file="net.pt",
+        pos_scale=1.0,
+        vel_scale=1.0,
+        torque_scale=1.0,
+        input_order="pos_vel",
+        input_idx=[0],
+        effort_limit=80.0,
+        saturation_effort=120.0,
+        velocity_limit=8.5,
+    )
+    (line,) = check_implicit_actuator(explicit, envelopes)
+    assert line.startswith("ActuatorNetMLPCfg is an explicit actuator") and "effort_limit" not in line
+    with pytest.raises(InputError, match=r"joint_names_expr = '\.\*_calf_joint': a string"):
+        check_implicit_actuator(SimpleNamespace(joint_names_expr=".*_calf_joint"), envelopes)
