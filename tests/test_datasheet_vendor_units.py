@@ -288,3 +288,29 @@ def test_every_documented_spelling_is_accepted() -> None:
     for text, unit in cases:
         value = to_si(text, unit, f"docs/datasheet.md {text!r}")
         assert math.isfinite(value) and value > 0.0, text
+
+
+@pytest.mark.parametrize(
+    ("text", "unit", "expected"),
+    [
+        ("3.3 [N.m]", "N*m", 3.3),  # ROBOTIS e-Manual
+        ("31 [rev/min]", "rad/s", 31 * RPM),
+        ("30 Kg.cm", "N*m", 30 * 9.80665 * 0.01),  # kilogram-force centimetres
+        ("16 N-cm", "N*m", 0.16),
+        ("DC24V", "V", 24.0),  # Harmonic Drive
+        ("10 Amps", "A", 10.0),  # Magmotor
+        ("100 rpm/Volt", "rad/s/V", 100 * RPM),
+        ("0.05 Vs/rad", "V*s/rad", 0.05),
+    ],
+)
+def test_vendor_spellings_are_read(text: str, unit: str, expected: float) -> None:
+    """Issue 23 item 10: each spelling names exactly one unit, so it is read, not refused."""
+    assert to_si(text, unit, "k") == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_tolerance_reads_the_nominal_and_says_so() -> None:
+    """Issue 23 item 10: '46 RPM ±10%' is 46 rpm, and the tolerance is named in a warning."""
+    with pytest.warns(
+        UserWarning, match=r"k: '46 RPM ±10%': read the nominal '46 RPM'; its tolerance of ±10 %"
+    ):
+        assert to_si("46 RPM ±10%", "rad/s", "k") == pytest.approx(46 * RPM, rel=1e-12)
