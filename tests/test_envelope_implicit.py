@@ -12,12 +12,14 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+import drive_envelope as de
 from drive_envelope import (
     PerformanceEnvelope,
     clamp_drive_impulse,
     clamp_effort_implicit,
     implicit_drive_effort,
 )
+from drive_envelope.errors import InputError
 
 DT = 0.01
 R_UNIT = 2.0  # response of a 0.5 kg*m^2 inertia
@@ -300,3 +302,54 @@ def test_drive_rejects_bad_arguments() -> None:
             dt=0.1,
             drive_type="velocity",  # type: ignore[arg-type]
         )
+
+
+# dt is a host number in every backend; a tensor or an array is refused with the same line
+
+ENV = de.PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=10.0, speed_effort_gradient=0.5)
+
+
+def test_an_array_dt_is_refused_alike_in_numpy_and_warp() -> None:
+    """One rule (``check_time_step``) in every backend: the same line for an array as a dt."""
+    with pytest.raises(
+        InputError, match=r"^dt: expected a Python float time step \[s\], got a numpy\.ndarray"
+    ):
+        de.clamp_effort_implicit(ENV, 5.0, 1.0, 2.0, np.array(0.01))
+    pytest.importorskip("warp")
+    import drive_envelope.warp as dw
+
+    params = dw.EnvelopeArrays.from_envelopes(ENV, count=1, device="cpu")
+    with pytest.raises(
+        InputError, match=r"^dt: expected a Python float time step \[s\], got a numpy\.ndarray"
+    ):
+        dw.clamp_effort_implicit(params, 5.0, 1.0, 2.0, np.array(0.01))
+    assert dw.clamp_effort_implicit(params, 5.0, 1.0, 2.0, np.int64(1)).numpy().shape == (1,)
+
+
+@pytest.mark.parametrize("dt", [0.01, np.float64(0.01), np.float32(0.01)])
+def test_every_backend_takes_the_same_host_numbers_as_dt(dt: object) -> None:
+    expected = float(de.clamp_effort_implicit(ENV, 5.0, 1.0, 2.0, 0.01))
+    assert float(de.clamp_effort_implicit(ENV, 5.0, 1.0, 2.0, dt)) == pytest.approx(expected, abs=1e-5)
+    pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort_implicit
+
+    got = clamp_effort_implicit(EnvelopeTensors.from_envelopes(ENV), 5.0, 1.0, 2.0, dt)
+    assert float(got) == pytest.approx(expected, abs=1e-5)
+    pytest.importorskip("warp")
+    import drive_envelope.warp as dw
+
+    params = dw.EnvelopeArrays.from_envelopes(ENV, count=1, device="cpu")
+    got = dw.clamp_effort_implicit(params, 5.0, 1.0, 2.0, dt).numpy()[0]
+    assert float(got) == pytest.approx(expected, abs=1e-5)
+
+
+def test_every_backend_refuses_a_tensor_dt() -> None:
+    torch = pytest.importorskip("torch")
+    with pytest.raises(InputError, match=r"^dt: "):
+        de.clamp_effort_implicit(ENV, 5.0, 0.0, 1.0, torch.tensor(0.01))  # type: ignore[arg-type]
+    pytest.importorskip("warp")
+    import drive_envelope.warp as dw
+
+    params = dw.EnvelopeArrays.from_envelopes(ENV, count=1, device="cpu")
+    with pytest.raises(InputError, match=r"^dt: "):
+        dw.clamp_effort_implicit(params, 5.0, 0.0, 1.0, torch.tensor(0.01))

@@ -26,6 +26,7 @@ import math
 import numpy as np
 import pytest
 
+import drive_envelope as de
 from drive_envelope import InputError, PerformanceEnvelope, clamp_effort
 
 ENV = PerformanceEnvelope(
@@ -246,3 +247,51 @@ def test_subnormal_slopes_give_no_nan_and_no_warning() -> None:
         warnings.simplefilter("error")
         assert env.effort_limit([0.0, 3.0, 4.0]).tolist() == [2.0, 0.0, 0.0]
         assert env.velocity_at_effort([0.0, 1.0, 3.0]).tolist() == [3.0, 3.0, 0.0]
+
+
+# the sign of a let-go zero: +0.0 in every backend (a new user's API finding)
+
+LET_GO_LINE = de.PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=10.0, speed_effort_gradient=0.5)
+LET_GO_BOX = de.PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=10.0)  # R = G = 0: 0 past 10
+SIGN_EFFORTS = (5.0, -5.0, 0.0, -0.0, 30.0, -30.0, math.inf, -math.inf, math.nan)
+SIGN_VELOCITIES = (0.0, 3.0, -3.0, 20.0, -20.0, math.nan, math.inf, -math.inf)
+
+
+def _sign_grid(repeat: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """Every effort at every velocity, repeated so that SIMD lanes and scalar tails both see each."""
+    effort, velocity = (a.ravel() for a in np.meshgrid(SIGN_EFFORTS, SIGN_VELOCITIES))
+    return np.tile(effort, repeat), np.tile(velocity, repeat)
+
+
+@pytest.mark.parametrize("envelope", [LET_GO_LINE, LET_GO_BOX], ids=["line", "box"])
+def test_numpy_let_go_is_positive_zero(envelope: de.PerformanceEnvelope) -> None:
+    for velocity in (math.nan, math.inf, -math.inf, 20.0):
+        for effort in (5.0, -5.0, math.inf, -math.inf, math.nan):
+            got = de.clamp_effort(envelope, effort, velocity)  # L = 0: NaN, infinite or beyond v_max
+            assert got == 0.0 and not np.signbit(got), (effort, velocity, got)
+    assert np.signbit(de.clamp_effort(envelope, -0.0, 1.0))  # inside the limit an effort is kept as is
+
+
+@pytest.mark.parametrize("envelope", [LET_GO_LINE, LET_GO_BOX], ids=["line", "box"])
+def test_backends_agree_on_every_zero_sign(envelope: de.PerformanceEnvelope) -> None:
+    effort, velocity = _sign_grid()
+    reference = de.clamp_effort(envelope, effort, velocity)
+    let_go = envelope.effort_limit(velocity) == 0.0
+    assert not np.signbit(reference[let_go]).any()
+    torch = pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort
+
+    params = EnvelopeTensors.from_envelopes(envelope, dtype=torch.float64)
+    eager = clamp_effort(params, torch.tensor(effort), torch.tensor(velocity)).numpy()
+    tracked_effort = torch.tensor(effort, requires_grad=True)
+    tracked = clamp_effort(params, tracked_effort, torch.tensor(velocity)).detach().numpy()
+    for got in (eager, tracked):
+        np.testing.assert_array_equal(got, reference)
+        np.testing.assert_array_equal(np.signbit(got), np.signbit(reference))
+    pytest.importorskip("warp")
+    import drive_envelope.warp as dw
+
+    arrays = dw.EnvelopeArrays.from_envelopes(envelope, count=effort.size, device="cpu")
+    warp = dw.clamp_effort(arrays, effort.astype(np.float32), velocity.astype(np.float32)).numpy()
+    np.testing.assert_array_equal(warp, reference.astype(np.float32))
+    np.testing.assert_array_equal(np.signbit(warp), np.signbit(reference))

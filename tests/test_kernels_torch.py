@@ -213,3 +213,68 @@ def test_envelope_tensors_build_and_validate() -> None:
             velocity_dependent_resistance=torch.zeros(2),
             speed_effort_gradient=torch.zeros(2),
         )
+
+
+# API findings of a new user (issue 23): from_values keeps the tensor and its graph, dt as a host number
+
+ENV = de.PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=10.0, speed_effort_gradient=0.5)
+
+
+def test_torch_from_values_keeps_the_tensor_and_its_gradient() -> None:
+    torch = pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort
+
+    m = torch.tensor(12.0, requires_grad=True)
+    params = EnvelopeTensors.from_values(max_effort=m, max_actuator_velocity=10.0)
+    assert params.max_effort is m
+    out = clamp_effort(params, torch.tensor([20.0, 5.0]), torch.tensor([1.0, 1.0]))
+    assert out.requires_grad
+    out[0].backward()  # clipped with R = 0: the result is max_effort itself
+    assert m.grad is not None and m.grad.item() == 1.0
+    m.grad = None
+    clamp_effort(params, torch.tensor(5.0), torch.tensor(1.0)).backward()  # inside: no dependence
+    assert m.grad is not None and m.grad.item() == 0.0
+
+
+def test_torch_from_values_casts_with_the_graph_and_still_validates() -> None:
+    torch = pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort
+
+    m = torch.tensor([12.0, 3.0], dtype=torch.float64, requires_grad=True)
+    params = EnvelopeTensors.from_values(max_effort=m, dtype=torch.float32)
+    assert params.max_effort.dtype == torch.float32 and params.max_effort.requires_grad
+    clamp_effort(params, torch.tensor([20.0, -5.0]), torch.tensor([0.0, 1.0])).sum().backward()
+    assert m.grad is not None and m.grad.tolist() == [1.0, -1.0]
+    bad = torch.tensor([-1.0], requires_grad=True)
+    with pytest.raises(InputError, match=r"from_values: max_effort = -1\.0; expected >= 0"):
+        EnvelopeTensors.from_values(max_effort=bad)
+    assert bad.grad is None and bad.grad_fn is None
+
+
+def test_torch_dt_tensor_is_refused_naming_the_expected_type() -> None:
+    torch = pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort_implicit
+
+    params = EnvelopeTensors.from_envelopes(ENV)
+    with pytest.raises(
+        InputError, match=r"^dt: expected a Python float time step \[s\], got a torch\.Tensor"
+    ):
+        clamp_effort_implicit(params, 5.0, 0.0, 1.0, torch.tensor(0.01))
+    with pytest.raises(
+        InputError, match=r"^dt: expected a Python float time step \[s\], got a numpy\.ndarray"
+    ):
+        clamp_effort_implicit(params, 5.0, 0.0, 1.0, np.array(0.01))
+    with pytest.raises(InputError, match=r"^dt: expected a time step > 0 and finite \[s\], got 0\.0"):
+        clamp_effort_implicit(params, 5.0, 0.0, 1.0, 0.0)
+
+
+def test_numpy_and_torch_take_a_numpy_integer_dt() -> None:
+    torch = pytest.importorskip("torch")
+    from drive_envelope.torch import EnvelopeTensors, clamp_effort_implicit
+
+    expected = float(de.clamp_effort_implicit(ENV, 5.0, 1.0, 0.01, 1))
+    assert float(de.clamp_effort_implicit(ENV, 5.0, 1.0, 0.01, np.int64(1))) == expected
+    got = clamp_effort_implicit(
+        EnvelopeTensors.from_envelopes(ENV, dtype=torch.float64), 5.0, 1.0, 0.01, np.int64(1)
+    )
+    assert float(got) == pytest.approx(expected)

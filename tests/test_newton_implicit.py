@@ -164,3 +164,33 @@ def test_chained_clamps_give_the_smaller_bound_at_the_end_of_step() -> None:
     expected = np.minimum(2.0, _limit(envelope, velocity[:, 0]))
     np.testing.assert_allclose(effort[:, 0], expected, rtol=0, atol=2e-6)
     assert np.any(expected < 2.0) and np.any(expected == 2.0)  # both clamps bind during the run
+
+
+def test_newton_bias_and_clamp_name_wrong_argument_types() -> None:
+    newton = pytest.importorskip("newton")
+    import warp as wp
+
+    from drive_envelope.newton import BiasForce, resolve_envelope_arguments
+
+    with pytest.raises(
+        InputError, match=r"BiasForce: model: expected a finalized newton\.Model, got ModelBuilder"
+    ):
+        BiasForce(newton.ModelBuilder())
+    with pytest.raises(InputError, match=r"BiasForce: model: expected a finalized newton\.Model, got int"):
+        BiasForce(3)
+    with pytest.raises(InputError, match=r"args: expected a dict of envelope arguments.*got float"):
+        resolve_envelope_arguments(12.0)  # type: ignore[arg-type]
+    from drive_envelope.newton import ClampingPerformanceEnvelope
+
+    with pytest.raises(InputError, match=r"max_effort: expected a float32 wp\.array.*got float"):
+        ClampingPerformanceEnvelope(12.0)
+    builder = newton.ModelBuilder()
+    body = builder.add_link(mass=1.0, inertia=wp.mat33(np.eye(3) * 0.01))
+    joint = builder.add_joint_revolute(-1, body, axis=(0.0, 0.0, 1.0))
+    builder.add_articulation([joint])
+    model = builder.finalize(device="cpu")
+    bias = BiasForce(model)
+    with pytest.raises(InputError, match=r"BiasForce\.compute: state: expected a newton\.State, got Model"):
+        bias.compute(model)
+    with pytest.raises(InputError, match=r"external: expected None or a float32 wp\.array.*got list"):
+        bias.compute(model.state(), external=[0.0])

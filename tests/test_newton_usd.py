@@ -345,3 +345,37 @@ def test_envelope_outside_an_articulation_is_ignored_with_a_warning(tmp_path: Pa
     builder = _builder(layer)
     with pytest.warns(EnvelopeImportWarning, match="not an articulation joint; PhysX ignores its envelope"):
         assert add_envelopes_from_usd(builder, layer) == []
+
+
+def test_newton_add_envelopes_refuses_a_finalized_builder(tmp_path: Path) -> None:
+    newton = pytest.importorskip("newton")
+    from drive_envelope.newton import add_envelopes_from_usd
+
+    builder = newton.ModelBuilder()
+    builder.finalize(device="cpu")
+    with pytest.raises(
+        InputError, match=r"builder: already finalized.*call add_envelopes_from_usd before finalize"
+    ):
+        add_envelopes_from_usd(builder, tmp_path / "robot.usda")
+
+
+def test_newton_add_envelopes_takes_a_builder_with_worlds(tmp_path: Path) -> None:
+    """``begin_world``/``end_world`` are not taken for ``finalize`` (the check reads past them)."""
+    newton = pytest.importorskip("newton")
+    from drive_envelope.newton import add_envelopes_from_usd
+
+    builder = newton.ModelBuilder()
+    builder.begin_world()
+    builder.end_world()
+    with pytest.raises(InputError, match=r"missing\.usda: no such file"):
+        add_envelopes_from_usd(builder, tmp_path / "missing.usda")
+
+
+def test_newton_add_envelopes_names_wrong_argument_types(tmp_path: Path) -> None:
+    newton = pytest.importorskip("newton")
+    from drive_envelope.newton import add_envelopes_from_usd
+
+    with pytest.raises(InputError, match=r"builder: expected a newton\.ModelBuilder, got NoneType"):
+        add_envelopes_from_usd(None, tmp_path / "robot.usda")
+    with pytest.raises(InputError, match=r"source: expected a USD file path .* or a Usd\.Stage, got int"):
+        add_envelopes_from_usd(newton.ModelBuilder(), 42)
