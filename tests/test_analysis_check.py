@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drive_envelope import PerformanceEnvelope
-from drive_envelope.analysis import CheckOptions, check_log, check_samples, load_joint_mapping
+from drive_envelope._src.cli.main import main
+from drive_envelope.analysis import CheckOptions, JointMapping, check_log, check_samples, load_joint_mapping
+from drive_envelope.datasheet import resolve_envelope
 from drive_envelope.errors import InputError
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -259,3 +262,112 @@ def test_overflowing_margins_are_outside_and_json_stays_strict() -> None:
     assert joint.samples_outside == 1 and joint.effort.minimum == -np.inf
     text = json.dumps(report.to_dict(), allow_nan=False)
     assert '"minimum": "-inf"' in text and '"duration": "inf"' in text
+
+
+# keys of a joint mapping that no joint of the log took (a new user's findings): warned on stderr and in
+# --json, with a hint for a regex written as a glob and for a name off only by case
+
+MAPPING_LOG = "time,joint,velocity,effort\n0,elbow_l,0,1\n0,elbow_r,0,1\n0,knee,0,1\n"
+
+
+def _write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_regex_key_warns_once_with_the_glob_hint(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Warn after the log is read that a regex key matches nothing, and say patterns are globs."""
+    jm = _write(
+        tmp_path, "jm.toml", '[joints]\n"elbow_.*" = "cubemars-ak80-9-v3"\n"*" = "damiao-dm-j4310-2ec"\n'
+    )
+    log = _write(tmp_path, "lj.csv", MAPPING_LOG)
+    assert main(["check", str(jm), str(log), "--json"]) == 0
+    captured = capsys.readouterr()
+    warnings = captured.err.splitlines()
+    assert warnings == [
+        f"drive-envelope: warning: {jm}: key 'joints.elbow_.*': matches no joint of the log; patterns are "
+        "globs (*, ?, [...]), not regular expressions (write 'elbow_*', not 'elbow_.*')"
+    ]
+    report = json.loads(captured.out)
+    assert [u["key"] for u in report["unused_keys"]] == ["elbow_.*"]
+    assert report["unused_keys"][0]["reason"].startswith("matches no joint of the log; patterns are globs")
+    rs = resolve_envelope("damiao-dm-j4310-2ec")  # every joint, elbows too, got the '*' envelope
+    assert {j["envelope"]["max_effort"] for j in report["joints"]} == {rs.max_effort}
+
+
+@pytest.mark.parametrize("key", ["elbow_\\d", "elbow_.+", "^elbow", "elbow$", "a|b", "(elbow)", "e{2}"])
+def test_every_regex_marker_gets_the_hint(key: str) -> None:
+    """Name the glob rule for each piece of regular-expression syntax."""
+    mapping = JointMapping.from_envelopes({key: PerformanceEnvelope(max_effort=1.0)})
+    (unused,) = mapping.unused_keys(["elbow_1"])
+    assert "not regular expressions" in unused.reason
+
+
+def test_plain_unmatched_key_has_no_regex_hint_and_case_gets_did_you_mean() -> None:
+    """Say only "matches no joint" for a plain key; suggest the joint that differs only in case."""
+    env = PerformanceEnvelope(max_effort=1.0)
+    mapping = JointMapping.from_envelopes({"wrist_*": env, "Knee": env, "*": env})
+    reasons = {u.key: u.reason for u in mapping.unused_keys(["knee", "elbow_l"])}
+    assert reasons == {
+        "wrist_*": "matches no joint of the log",
+        "Knee": "matches no joint of the log; did you mean 'knee'? (names are case-sensitive)",
+    }
+
+
+def test_shadowed_key_warns_as_never_used(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Warn that '*_l' is never used: elbow_l takes 'elbow_*' (globs in file order), knee takes '*'."""
+    body = '[joints]\n"elbow_*" = { max_effort = 10.0 }\n"*_l" = { max_effort = 20.0 }\n'
+    body += '"*" = { max_effort = 30.0 }\n'
+    jm = _write(tmp_path, "jm.toml", body)
+    log = _write(tmp_path, "lj.csv", MAPPING_LOG)
+    assert main(["check", str(jm), str(log)]) == 0
+    err = capsys.readouterr().err
+    assert err == (
+        f"drive-envelope: warning: {jm}: key 'joints.*_l': never used: every joint of the log it matches "
+        "('elbow_l') takes 'elbow_*' first (exact names first, then globs in file order)\n"
+    )
+    report = check_log(jm, log)
+    assert [(u.key, u.reason.split(":")[0]) for u in report.unused_keys] == [("*_l", "never used")]
+    assert {j.joint: j.envelope.max_effort for j in report.joints} == {
+        "elbow_l": 10.0,
+        "elbow_r": 10.0,
+        "knee": 30.0,
+    }
+
+
+def test_exact_name_later_in_the_file_shadows_an_earlier_glob() -> None:
+    """Count an exact key as taking its joint first, whatever its place in the file."""
+    env = PerformanceEnvelope(max_effort=1.0)
+    mapping = JointMapping.from_envelopes({"knee*": env, "knee": env})
+    (unused,) = mapping.unused_keys(["knee"])
+    assert unused.key == "knee*" and "takes 'knee' first" in unused.reason
+
+
+def test_every_key_used_and_single_envelope_report_no_unused_keys(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Print no warning and an empty list when each key gave some joint its envelope."""
+    jm = _write(
+        tmp_path, "jm.toml", '[joints]\n"elbow_*" = { max_effort = 10.0 }\nknee = { max_effort = 3.0 }\n'
+    )
+    log = _write(tmp_path, "lj.csv", MAPPING_LOG)
+    assert main(["check", str(jm), str(log), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == "" and json.loads(captured.out)["unused_keys"] == []
+    single = check_log(PerformanceEnvelope(max_effort=5.0), {"velocity": [0.0], "effort": [1.0]})
+    assert single.unused_keys == () and single.to_dict()["unused_keys"] == []
+
+
+def test_check_mapping_values_share_the_map_reader(tmp_path: Path) -> None:
+    """Read a check mapping's tables as map files are read: envelope/datasheet tables, instance ignored."""
+    _write(tmp_path, "big.toml", "max_effort = 100.0\n")
+    body = (
+        '[joints]\n"elbow_*" = { envelope = "big.toml", instance = "angular" }\n'
+        'knee = { max_effort = "3 N*m", instance = "rotX" }\n'
+    )
+    mapping = load_joint_mapping(_write(tmp_path, "jm.toml", body))
+    assert [(key, env.max_effort) for key, env in mapping.entries] == [("elbow_*", 100.0), ("knee", 3.0)]
+    bad = _write(tmp_path, "bad.toml", '[joints]\nknee = { envelope = "big.toml", max_effort = 3.0 }\n')
+    with pytest.raises(InputError, match=r"key 'joints\.knee': key 'envelope' with inline envelope key"):
+        load_joint_mapping(bad)

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import gzip
 import importlib.util
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from drive_envelope.analysis import LogColumns, iter_log, read_log
+from drive_envelope._src.analysis.log_model import ColumnPlan
+from drive_envelope._src.cli.main import main
+from drive_envelope.analysis import LogColumns, check_log, iter_log, read_log
 from drive_envelope.errors import InputError
 
 HAS_PYARROW = importlib.util.find_spec("pyarrow") is not None
@@ -259,3 +262,47 @@ def test_joint_names_are_read_without_outer_spaces(tmp_path: Path, engine: str) 
     chunk = read_log(path, engine=engine)  # type: ignore[arg-type]
     assert chunk.names == ("hip", "knee") and chunk.joint is not None
     assert chunk.joint.tolist() == [0, 0, 1]
+
+
+# columns found up to case (a new user's findings): 'Velocity [RPM]', 'Time,Position,Velocity,Effort'
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        "time,position,Velocity [RPM],effort",
+        "Time,Position,Velocity [rpm],Effort",
+        "TIME, VELOCITY [Rpm], EFFORT",
+    ],
+)
+def test_columns_are_found_up_to_case_and_rpm_is_read(tmp_path: Path, header: str) -> None:
+    """Find 'velocity' in 'Velocity [RPM]' and read the unit as rpm (the units parser's vendor spelling)."""
+    ak = write(tmp_path, 'max_effort = "12 N*m"\nmax_actuator_velocity = "300 rpm"\n', "ak.toml")
+    row = ["0.1", "100", "2"] if header.count(",") == 2 else ["0.1", "0", "100", "2"]
+    log = write(tmp_path, header + "\n" + ",".join(row) + "\n", "c1.csv")
+    (joint,) = check_log(ak, log).joints
+    assert joint.samples == 1 and joint.velocity is not None
+    assert joint.velocity.minimum == pytest.approx(200 * 2 * 3.141592653589793 / 60)  # 300 - 100 rpm
+
+
+def test_plain_capitalised_header_checks(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Check 'Time,Position,Velocity,Effort' (was: exit 2, no column 'velocity')."""
+    ak = write(tmp_path, 'max_effort = "12 N*m"\n', "ak.toml")
+    log = write(tmp_path, "Time,Position,Velocity,Effort\n0,0,1,1\n0.1,0,1,13\n", "c2.csv")
+    assert main(["check", str(ak), str(log), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert report["joints"][0]["samples_outside"] == 1 and report["joints"][0]["duration"] == 0.1
+
+
+def test_two_columns_up_to_case_stay_ambiguous_and_joint_column_too() -> None:
+    """Refuse 'Velocity,velocity' as today; find a 'Joint' column by its whole header."""
+    with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
+        ColumnPlan(["time", "Velocity", "velocity", "effort"], LogColumns(), "log.csv")
+    with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
+        ColumnPlan(["velocity", "VELOCITY [rpm]", "effort"], LogColumns(), "log.csv")
+    plan = ColumnPlan(["Joint", "Velocity", "Effort"], LogColumns(), "log.csv")
+    assert plan.joint and plan.position == {"joint": 0, "velocity": 1, "effort": 2}
+    assert ColumnPlan(["qd", "tau"], LogColumns(velocity="QD", effort="Tau"), "x").position == {
+        "velocity": 0,
+        "effort": 1,
+    }

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drive_envelope import InputError
-from drive_envelope._src.identify.logs import read_bench_log
+from drive_envelope._src.identify.logs import _plan, read_bench_log
 from drive_envelope._src.identify.stand import StandWarning, read_stand
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "bam" / "logs"
@@ -148,3 +148,12 @@ def test_shipped_bam_stand_reads() -> None:
     assert stand.scenario.pendulum is not None and stand.scenario.pendulum.mass == 0.49
     assert stand.duty_per_rad == pytest.approx(1.1509510008905426)
     assert stand.scenario.simulation.position_iterations == 1
+
+
+def test_identify_bench_header_uses_the_same_rule() -> None:
+    """Find bench columns up to case with the check's rule; two up to case stay ambiguous."""
+    plan, scales = _plan(["Time", "Position [deg]", "Target_Position [deg]", "Velocity [RPM]"], "bench.csv")
+    assert plan == {"time": 0, "position": 1, "target_position": 2, "velocity": 3}
+    assert scales["velocity"] == pytest.approx(2 * 3.141592653589793 / 60)
+    with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
+        _plan(["time", "position", "target_position", "Velocity", "velocity"], "bench.csv")

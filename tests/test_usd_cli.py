@@ -354,3 +354,23 @@ def test_real_immutable_output_is_one_line(
         assert out.read_text(encoding="utf-8") == "old" and not list(tmp_path.glob(".locked.usda.*"))
     finally:
         subprocess.run(["chattr", "-i", str(out)], check=False)
+
+
+def test_usd_apply_inline_map_on_the_fr3(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Apply an inline map to Newton's FR3 and read it back (needs usd-core and the shared assets)."""
+    pytest.importorskip("pxr")
+    asset = Path(__file__).resolve().parents[2] / "shared/data/newton-assets/fr3/fr3_usd/fr3.usda"
+    if not asset.is_file():
+        pytest.skip("no shared newton-assets")
+    body = '[joints]\n"fr3_joint1" = { max_effort = "12 N*m", max_actuator_velocity = "2.6 rad/s" }\n'
+    out = tmp_path / "fr3_envelope.usda"
+    inline_map = tmp_path / "map.toml"
+    inline_map.write_text(body, encoding="utf-8")
+    assert main(["usd", "apply", str(asset), "--map", str(inline_map), "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["usd", "show", str(out), "--json"]) == 0
+    drives = {d["joint"]: d for d in json.loads(capsys.readouterr().out)["drives"]}
+    envelope = drives["/fr3/Physics/fr3_joint1"]["envelope"]
+    assert envelope["max_effort"] == 12.0 and envelope["max_actuator_velocity"] == pytest.approx(
+        2.6, rel=1e-6
+    )

@@ -175,3 +175,70 @@ def test_shipped_map_by_name() -> None:
     assert len(match.joints) == 12
     with pytest.raises(InputError, match=r"unitree-go3: no such map file, and .*did you mean 'unitree-go2'"):
         read_map("unitree-go3")
+
+
+# map files take inline envelope tables; regex and case hints for unmatched patterns (a new user's
+# findings)
+
+FR3 = [f"/fr3/Physics/fr3_joint{i}" for i in range(1, 8)]  # Newton's fr3.usda prim paths
+
+
+def test_map_file_takes_an_inline_envelope(tmp_path: Path) -> None:
+    """Read the inline form of docs/analysis.md in a usd/mujoco map (was: unknown key 'max_effort')."""
+    body = (
+        '"fr3_joint1" = { max_effort = "12 N*m", max_actuator_velocity = "2.6 rad/s" }\n'
+        '"fr3_joint[2-7]" = { max_effort = 87, max_actuator_velocity = "150 deg/s", instance = "angular" }\n'
+    )
+    match = match_joints(read_map(_map(tmp_path, body)), FR3)
+    resolved = {item.joint.rpartition("/")[2]: item for item in resolve_envelopes(match)}
+    first = resolved["fr3_joint1"]
+    assert first.envelope == PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=2.6)
+    assert first.entry.instance is None and first.entry.source == ""
+    seventh = resolved["fr3_joint7"]
+    assert seventh.envelope is not None and seventh.envelope.max_actuator_velocity == pytest.approx(
+        2.6179938779914944
+    )
+    assert seventh.entry.instance == "angular" and match.warnings == ()
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        (
+            '{ envelope = "x.toml", max_effort = "12 N*m" }',
+            "key 'envelope' with inline envelope key(s) 'max_effort'",
+        ),
+        (
+            '{ datasheet = "x.toml", joint = "revolute" }',
+            "key 'datasheet' with inline envelope key(s) 'joint'",
+        ),
+        ("{ max_efort = 3 }", "unknown key 'max_efort' (did you mean 'max_effort'?)"),
+        ('{ max_effort = "12 m/s" }', "key 'max_effort'"),
+        ('{ instance = "rotX" }', "expected exactly one of 'envelope' or 'datasheet', or an inline envelope"),
+        ("{ max_actuator_velocity = 3 }", "missing required key 'max_effort'"),
+    ],
+)
+def test_bad_inline_entries_name_the_key(tmp_path: Path, value: str, message: str) -> None:
+    """Refuse a source mixed with envelope keys, an unknown key and bad values, in one line."""
+    path = _map(tmp_path, f'"fr3_joint1" = {value}\n')
+    with pytest.raises(InputError) as info:
+        read_map(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: key 'joints.fr3_joint1': ") and message in text and "\n" not in text
+
+
+def test_unmatched_map_pattern_hints_globs_and_case(tmp_path: Path) -> None:
+    """Add the glob hint to a regex pattern's error and 'did you mean' to a name off only by case."""
+    regex = _map(tmp_path, '"fr3_joint\\\\d" = { max_effort = 1.0 }\n', "re.toml")
+    with pytest.raises(InputError, match="patterns are globs") as info:
+        match_joints(read_map(regex), FR3)
+    assert "matches no joint name" in str(info.value)
+    upper = _map(tmp_path, '"FR3_JOINT1" = { max_effort = 1.0 }\n', "up.toml")
+    with pytest.raises(InputError, match=r"did you mean 'fr3_joint1'\?") as info:
+        match_joints(read_map(upper), FR3)
+    assert "not regular expressions" not in str(info.value)
+    glob = _map(tmp_path, '"FR3_*" = { max_effort = 1.0 }\n', "glob.toml")
+    with pytest.raises(
+        InputError, match=r"did you mean 'fr3_joint1', 'fr3_joint2', 'fr3_joint3' and 4 more\?"
+    ):
+        match_joints(read_map(glob), FR3)
