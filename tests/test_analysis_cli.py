@@ -263,3 +263,23 @@ def test_check_accepts_a_header_with_spaces(
     log.write_text("time, velocity, effort\n0.0, 1.0, 2.0\n0.1, 2.0, 3.0\n", encoding="utf-8")
     assert main(["check", str(envelope_file), str(log)]) == 0
     assert "2 samples over 0.1 s, 0 outside" in capsys.readouterr().out
+
+
+CORPUS = Path(__file__).resolve().parent / "corpus" / "good"
+ENVELOPE = CORPUS / "envelope.toml"  # max_effort 10, v_max 5, R 0.5, G 0.2
+
+
+def test_check_and_fit_read_simulates_json_trajectory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "run.json"
+    assert main(["simulate", str(CORPUS / "scenario.toml"), "-o", str(run)]) == 0
+    csv = tmp_path / "run.csv"
+    assert main(["simulate", str(CORPUS / "scenario.toml"), "-o", str(csv)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(ENVELOPE), str(run), "--json"]) in (0, 1)
+    from_json = json.loads(capsys.readouterr().out)["joints"][0]
+    assert main(["check", str(ENVELOPE), str(csv), "--json"]) in (0, 1)
+    from_csv = json.loads(capsys.readouterr().out)["joints"][0]
+    assert from_json["samples"] == from_csv["samples"] == 11
+    assert from_json["effort"] == from_csv["effort"] and from_json["duration"] == from_csv["duration"]

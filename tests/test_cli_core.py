@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import subprocess
@@ -191,3 +192,68 @@ def test_progress_bar_draws_only_on_a_terminal_and_only_for_long_runs() -> None:
     bar.close()
     assert tty.text.startswith("\rsimulate [###############...............]  50.0 % (5/10")
     assert tty.text.endswith("\n") and tty.text.count("\r") == 1
+
+
+# standard output that closes early or fills up keeps the exit status (a new user's findings)
+
+CORPUS = Path(__file__).resolve().parent / "corpus" / "good"
+ENVELOPE = CORPUS / "envelope.toml"  # max_effort 10, v_max 5, R 0.5, G 0.2
+
+
+def _failing_log(folder: Path) -> Path:
+    """A log whose second sample asks 20 N*m at rest, twice the envelope's max_effort of 10."""
+    log = folder / "log.csv"
+    log.write_text(
+        "time,velocity,effort\n0,0,1\n0.1,0,20\n" + "".join(f"{0.2 + i},1,2\n" for i in range(4000))
+    )
+    return log
+
+
+class _Stream:
+    """A stdout stand-in whose writes fail like a closed pipe or a full disk."""
+
+    def __init__(self, error: OSError) -> None:
+        self.error = error
+
+    def write(self, text: str) -> int:
+        raise self.error
+
+    def flush(self) -> None:
+        raise self.error
+
+    def fileno(self) -> int:
+        raise ValueError("no file descriptor")
+
+
+def test_a_closed_pipe_keeps_the_failed_checks_status(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(sys, "stdout", _Stream(BrokenPipeError(errno.EPIPE, "Broken pipe")))
+    assert main(["check", str(ENVELOPE), str(_failing_log(tmp_path))]) == 1
+
+
+def test_a_closed_pipe_keeps_a_passing_checks_status(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sys, "stdout", _Stream(BrokenPipeError(errno.EPIPE, "Broken pipe")))
+    assert main(["check", str(ENVELOPE), str(CORPUS / "log.csv")]) == 0
+
+
+def test_a_reader_that_leaves_early_does_not_hide_a_failed_check(tmp_path: Path) -> None:
+    """The real thing: ``check ... | head -c 1`` with the pipe closed before the output is flushed."""
+    command = [sys.executable, "-m", "drive_envelope", "check", str(ENVELOPE), str(_failing_log(tmp_path))]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdout is not None and process.stderr is not None
+    process.stdout.close()  # the reader is gone long before Python has started
+    stderr = process.stderr.read().decode()
+    assert process.wait(timeout=120) == 1
+    assert "Traceback" not in stderr and "Exception ignored" not in stderr
+
+
+def test_a_full_standard_output_is_one_line_and_status_2(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "stdout", _Stream(OSError(errno.ENOSPC, "No space left on device")))
+    assert main(["envelope", "show", str(ENVELOPE)]) == 2
+    assert (
+        capsys.readouterr().err
+        == "drive-envelope: error: cannot write to standard output: No space left on device\n"
+    )

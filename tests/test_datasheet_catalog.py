@@ -135,3 +135,9 @@ def test_import_stays_light() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_no_catalog_actuator_draws_a_warning() -> None:
+    """Real vendor numbers are consistent: the warnings fire on slips, not on datasheets as printed."""
+    for entry in catalog_entries():
+        assert derive(load_catalog_datasheet(entry.key)).warnings == (), entry.key

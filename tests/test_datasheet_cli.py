@@ -297,3 +297,42 @@ def test_empty_or_folder_output_is_refused(tmp_path: Path, capsys: pytest.Captur
     assert code == 2 and "expected a file name" in err
     code, _, err = run(capsys, "derive", sheet, "-o", str(tmp_path))
     assert code == 2 and "is a folder" in err
+
+
+@pytest.mark.parametrize("name", ["env.yaml", "env.txt", "env"])
+def test_derive_refuses_an_output_suffix_it_cannot_write(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = tmp_path / name
+    assert main(["derive", "tmotor-ak80-6", "-o", str(target)]) == 2
+    assert "expected a file name ending in .toml, .json, .usda or .usd" in capsys.readouterr().err
+    assert not target.exists()
+
+
+def test_derive_writes_each_format_its_suffix_names(tmp_path: Path) -> None:
+    for name, first in (("e.toml", "name ="), ("e.json", "{"), ("e.usda", "#usda 1.0")):
+        assert main(["derive", "tmotor-ak80-6", "--format", "json", "-o", str(tmp_path / name)]) == 0
+        assert (tmp_path / name).read_text().lstrip().startswith(first)
+
+
+@pytest.mark.parametrize("format", ["text", "json"])
+def test_an_efficiency_typed_as_a_tiny_percentage_draws_a_warning(
+    format: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["derive", "tmotor-ak80-6", "--format", format, "--set", "gear.efficiency=0.9 %"]) == 0
+    err = capsys.readouterr().err  # on stderr whatever stdout shows: it may be a file
+    assert "gear.efficiency = 0.009 is unusually low: a percentage needs its sign" in err
+
+
+def test_a_limit_below_float32s_range_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "tiny.toml"
+    argv = ["derive", "tmotor-ak80-6", "--set", "motor.max_torque=1e-320", "-o", str(target)]
+    assert main(argv) == 2
+    assert "below float32's smallest normal number, 1.18e-38" in capsys.readouterr().err
+    assert not target.exists()
+
+
+def test_an_unknown_override_key_lists_the_valid_ones(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["derive", "tmotor-ak80-6", "--set", "motor.nope=1"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown key 'nope' in [motor]; valid keys in [motor]: " in err and "torque_constant" in err

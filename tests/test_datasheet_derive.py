@@ -18,6 +18,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
 from drive_envelope._src.datasheet.derive import derive
 from drive_envelope._src.datasheet.limits import EFFORT_LIMITS, VELOCITY_LIMITS
 from drive_envelope._src.datasheet.load import datasheet_from_mapping
@@ -616,3 +617,66 @@ def test_a_motor_speed_beyond_any_motor_is_a_warning() -> None:
     (line,) = found
     assert "motor.max_speed = 50000 rad/s is outside what motors have (0.1 rad/s to 12000 rad/s)" in line
     assert "check its unit ('rpm' vs 'rad/s'" in line
+
+
+def _hand_typed_sheet(**motor: object) -> dict[str, object]:
+    return {
+        "name": "hand-typed",
+        "motor": dict(motor),
+        "gear": {"ratio": "10:1", "efficiency": "90 %"},
+        "controller": {"max_current": "24 A", "max_voltage": "48 V"},
+    }
+
+
+def test_a_torque_constant_typed_without_its_unit_draws_a_warning() -> None:
+    # 91 read as SI N*m/A with 100 rpm/V (10.47 (rad/s)/V): k_t * k_v = 952.9 where an ideal motor has 1
+    motor = {"torque_constant": 91, "speed_constant": "100 rpm/V"}
+    sheet = datasheet_from_mapping(_hand_typed_sheet(**motor), source="s.toml")
+    (warning,) = derive(sheet).warnings
+    assert warning.startswith("s.toml: motor.torque_constant * motor.speed_constant = 952.9 in SI units")
+
+
+def test_constants_that_agree_draw_no_warning() -> None:
+    # 91 mNm/A and 105 rpm/V: 0.091 * 10.9956 = 1.0006
+    motor = {"torque_constant": "91 mNm/A", "speed_constant": "105 rpm/V"}
+    sheet = datasheet_from_mapping(_hand_typed_sheet(**motor), source="s")
+    assert derive(sheet).warnings == ()
+
+
+def test_a_printed_gradient_that_disagrees_with_resistance_draws_a_warning() -> None:
+    # R/k_t^2 = 0.571 / 0.0369^2 = 419.36 (rad/s)/(N*m); 15.8 rpm/mNm = 1654.57: 3.95x
+    motor = {
+        "torque_constant": "36.9 mNm/A",
+        "speed_constant": "259 rpm/V",
+        "terminal_resistance": "0.571 ohm",
+        "speed_torque_gradient": "15.8 rpm/mNm",
+    }
+    warnings = derive(datasheet_from_mapping(_hand_typed_sheet(**motor), source="m.toml")).warnings
+    assert len(warnings) == 1 and "(3.95x): check their units" in warnings[0]
+    motor["speed_torque_gradient"] = "4 rpm/mNm"  # 418.88 (rad/s)/(N*m): agrees
+    assert derive(datasheet_from_mapping(_hand_typed_sheet(**motor), source="m.toml")).warnings == ()
+
+
+def test_a_rotary_motor_on_a_prismatic_joint_asks_for_a_screw() -> None:
+    data = {"name": "x", "joint": "prismatic", "motor": {"max_torque": "1 N*m", "max_speed": "3000 rpm"}}
+    with pytest.raises(InputError, match=r"a rotary motor on a prismatic joint needs \[screw\] lead"):
+        datasheet_from_mapping(data, source="d.toml")
+
+
+def test_derive_notes_a_speed_line_below_max_effort() -> None:
+    """CubeMars AK70-10: max_actuator_velocity / speed_effort_gradient = 23.4 N*m < max_effort 24.8."""
+    result = derive(load_catalog_datasheet("cubemars-ak70-10"))
+    env = result.envelope
+    stall = env.max_actuator_velocity / env.speed_effort_gradient
+    assert stall < env.max_effort == pytest.approx(24.8)
+    (note,) = [n for n in result.notes if n.startswith("the speed line reaches zero speed")]
+    assert f"{stall:.6g} N*m" in note and "no operating point reaches max_effort" in note
+
+
+def test_derive_notes_a_default_modulation_below_a_printed_speed() -> None:
+    """AK80-6: 100 rpm/V * 24 V * 0.9 / 6 = 37.699 rad/s, below the printed 38.2 rad/s output rating."""
+    result = derive(load_catalog_datasheet("tmotor-ak80-6"))
+    assert result.envelope.max_actuator_velocity == pytest.approx(
+        100 * 2 * 3.141592653589793 / 60 * 24 * 0.9 / 6
+    )
+    assert any("below the printed output_rating 38.2 rad/s" in note for note in result.notes)

@@ -88,3 +88,19 @@ def test_outputs_create_missing_folders(argv: list[str], tmp_path: Path) -> None
     assert main(resolved) == 0
     target = Path(resolved[-1])
     assert target.is_file() and target.stat().st_size > 0
+
+
+def test_a_file_is_never_read_as_toml_by_guess(tmp_path: Path) -> None:
+    sheet = tmp_path / "motor.txt"
+    sheet.write_text('name = "x"\n')
+    with pytest.raises(
+        InputError, match=r"motor\.txt: expected a \.toml, \.json, \.yaml or \.yml file.*'\.txt'"
+    ):
+        read_mapping(sheet)
+
+
+def test_load_envelope_of_a_catalog_name_points_to_the_resolver() -> None:
+    from drive_envelope import load_envelope
+
+    with pytest.raises(InputError, match=r"'tmotor-ak80-6': no such envelope file; .*resolve_envelope"):
+        load_envelope("tmotor-ak80-6")

@@ -211,3 +211,12 @@ def test_extreme_envelopes_are_drawn_to_scale_or_refused() -> None:
     assert plot.axes[0].get_xlim()[1] == pytest.approx(1.15e-200)
     with pytest.raises(InputError, match="too large to draw to scale"):
         plot_envelope(PerformanceEnvelope(max_effort=1e308))
+
+
+def test_a_glyph_the_font_lacks_is_one_warning_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plot", "tmotor-ak80-6", "--title", "AK 日", "-o", str(tmp_path / "t.svg")]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    (line,) = [line for line in lines if "Glyph" in line]  # once, without matplotlib's source line
+    assert line.startswith("drive-envelope: warning: Glyph 26085 (") and "missing from font" in line

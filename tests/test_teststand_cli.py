@@ -239,3 +239,26 @@ def test_mujoco_runs_a_tgs_scenario_as_physx_tgs_without_a_warning(tmp_path: Pat
     )
     assert pgs.returncode == 0, pgs.stderr
     assert "TGS" not in pgs.stderr
+
+
+CORPUS = Path(__file__).resolve().parent / "corpus" / "good"
+
+
+def test_a_run_of_no_step_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "run.csv"
+    argv = ["simulate", str(CORPUS / "scenario.toml"), "-o", str(out), "--set", "simulation.dt=1"]
+    assert main(argv) == 2  # the scenario's duration is 0.1 s
+    assert "simulation.dt = 1 s is longer than simulation.duration = 0.1 s" in capsys.readouterr().err
+    assert not out.exists()
+    argv[-1] = "simulation.dt=0.15"  # round(0.1 / 0.15) = 1 step, but dt > duration all the same
+    assert main(argv) == 2 and "is longer than simulation.duration" in capsys.readouterr().err
+
+
+def test_a_duration_that_is_not_whole_steps_says_where_the_run_ends(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run.csv"
+    argv = ["simulate", str(CORPUS / "scenario.toml"), "-o", str(out), "--set", "simulation.dt=0.03"]
+    assert main(argv) == 0  # 0.1 s / 0.03 s = 3.33: 3 steps, to 0.09 s
+    assert "simulating round(duration / dt) = 3 steps, to 0.09 s" in capsys.readouterr().err
+    assert len(out.read_text().strip().splitlines()) == 1 + 4  # header, initial state, 3 steps

@@ -397,3 +397,27 @@ def test_non_numeric_envelope_attribute_is_one_line() -> None:
     name = "physxDrivePerformanceEnvelope:angular:maxActuatorVelocity"
     with pytest.raises(InputError, match=rf"joint '/hinge' \(angular\): {name} is 'fast'; expected a number"):
         list_drives(Usd.Stage.Open(layer))
+
+
+def test_a_usd_joint_path_with_a_typo_names_the_nearest_joints() -> None:
+    from pxr import Usd, UsdPhysics
+
+    from drive_envelope._src.adapters.usd.authoring import resolve_joint
+    from drive_envelope._src.adapters.usd.stage import register_schemas
+
+    register_schemas()  # before the first stage, as every entry point does
+    stage = Usd.Stage.CreateInMemory()
+    UsdPhysics.RevoluteJoint.Define(stage, "/Robot/Arm/RevoluteJoint")
+    UsdPhysics.PrismaticJoint.Define(stage, "/Robot/Rail/Slider")
+    with pytest.raises(
+        InputError, match=r"'/Robot/Arm/RevolutJoint': no such prim .*did you mean '/Robot/Arm/RevoluteJoint'"
+    ):
+        resolve_joint(stage, "/Robot/Arm/RevolutJoint")
+    with pytest.raises(
+        InputError, match=r"'/RevoluteJoint': no such prim .*did you mean '/Robot/Arm/RevoluteJoint'\?\)"
+    ):
+        resolve_joint(stage, "RevoluteJoint")  # a bare name is relative to the root
+    with pytest.raises(
+        InputError, match=r"'/Zzz': no such prim .*; it has 2 joint\(s\), e\.g\. '/Robot/Arm/RevoluteJoint'"
+    ):
+        resolve_joint(stage, "/Zzz")
