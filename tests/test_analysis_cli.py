@@ -11,6 +11,8 @@ import pytest
 
 from drive_envelope import PerformanceEnvelope, load_envelope, save_envelope
 from drive_envelope._src.cli.main import main
+from drive_envelope.analysis import read_log
+from drive_envelope.errors import InputError
 
 ENV = PerformanceEnvelope(
     max_effort=10.0,
@@ -283,3 +285,243 @@ def test_check_and_fit_read_simulates_json_trajectory(
     from_csv = json.loads(capsys.readouterr().out)["joints"][0]
     assert from_json["samples"] == from_csv["samples"] == 11
     assert from_json["effort"] == from_csv["effort"] and from_json["duration"] == from_csv["duration"]
+
+
+# bench logs of a new user: check and fit read header units, say when time goes back, warn when one
+# sample decides a line
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rev/min
+UNITS_LOG = "time [s],velocity [rpm],effort [mNm]\n0,0,1000\n0.1,100,11000\n0.2,200,9000\n"
+SI_LOG = f"time,velocity,effort\n0,0,1\n0.1,{100 * RPM!r},11\n0.2,{200 * RPM!r},9\n"
+
+
+def _write_log(path: Path, text: str) -> Path:
+    """Write a bench log as a new user types it."""
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def bench_envelope_file(tmp_path: Path) -> Path:
+    """12 N*m, 40 rad/s: the bench logs below lie inside it."""
+    path = tmp_path / "env.toml"
+    save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
+    return path
+
+
+def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    """Run the CLI: exit status, stdout, stderr."""
+    code = main(args)
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def one_line_error(code: int, err: str) -> str:
+    assert code == 2 and err.startswith("drive-envelope: error:") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    return err
+
+
+def test_fit_reads_header_units(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`fit` on a log in rpm and mNm gives the fit of the same log in SI, not 1000x the effort."""
+    units = _write_log(tmp_path / "units.csv", UNITS_LOG)
+    si = _write_log(tmp_path / "si.csv", SI_LOG)
+    results = []
+    for args in (
+        [str(units)],
+        [str(units), "--velocity-column", "velocity [rpm]", "--effort-column", "effort [mNm]"],
+        [str(si)],
+    ):
+        code, out, _ = _run_cli(["fit", *args, "--json", "--bootstrap", "0"], capsys)
+        assert code == 0
+        results.append(json.loads(out))
+    for name in ("max_effort", "velocity_dependent_resistance"):
+        assert results[0][name] == pytest.approx(results[2][name], rel=1e-12)
+        assert results[1][name] == results[0][name]
+    assert results[0]["max_effort"] < 12.0  # N*m: 11918 when the mNm were read as N*m
+
+
+def test_check_reads_header_units(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`check` on a log in rpm and mNm reports what it reports for the same log in SI."""
+    units = _write_log(tmp_path / "units.csv", UNITS_LOG)
+    si = _write_log(tmp_path / "si.csv", SI_LOG)
+    reports = []
+    for log in (units, si):
+        code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
+        reports.append((code, json.loads(out)["joints"][0]))
+    (code_u, joint_u), (code_si, joint_si) = reports
+    assert code_u == code_si == 0  # 11 N*m and 20.9 rad/s: inside 12 N*m and 40 rad/s
+    assert joint_u["samples"] == 3 and joint_u["duration"] == pytest.approx(0.2)
+    assert joint_u["effort"]["minimum"] == pytest.approx(joint_si["effort"]["minimum"], rel=1e-12)
+    assert joint_u["effort"]["minimum"] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    ("header", "fragment"),
+    [
+        ("time,velocity [N*m],effort", "column 'velocity [N*m]': unit 'N*m' is not an angular speed"),
+        ("time,velocity [Hz],effort", "column 'velocity [Hz]': unit 'Hz' is not an angular speed"),
+        ("time,velocity [blips],effort", "column 'velocity [blips]': unknown unit 'blips'"),
+        ("time,velocity,effort [J]", "column 'effort [J]': unit 'J' is not a torque"),
+        ("time [kg],velocity,effort", "column 'time [kg]': unit 'kg' is not a time"),
+        (
+            "time,velocity [mm/s],effort",
+            "unit 'mm/s' is not an angular speed in rad/s (e.g. '3000 rpm'); "
+            "it is the unit of a prismatic joint",
+        ),
+        ("time,velocity,velocity [rpm],effort", "column 'velocity' is ambiguous"),
+    ],
+)
+def test_bad_header_units_are_one_line_errors(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str], header: str, fragment: str
+) -> None:
+    """A unit of the wrong dimension or an unknown one names the column and the unit, exit 2."""
+    cells = ",".join(["1"] * len(header.split(",")))
+    log = _write_log(tmp_path / "bad.csv", f"{header}\n{cells}\n{cells}\n{cells}\n")
+    commands = [["check", str(bench_envelope_file), str(log)], ["fit", str(log)]]
+    for args in commands[:1] if header.startswith("time [") else commands:  # fit never reads the time
+        err = one_line_error(*_run_cli(args, capsys)[::2])
+        assert fragment in err and str(log) in err
+
+
+def test_prismatic_units_follow_the_joint_type(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """mm/s and N read for a prismatic fit and check; rpm with N (two joint types) is refused."""
+    log = _write_log(tmp_path / "lin.csv", "velocity [mm/s],effort [kN]\n0,0.1\n100,0.2\n200,0.15\n")
+    code, out, _ = _run_cli(["fit", str(log), "--joint", "prismatic", "--json", "--bootstrap", "0"], capsys)
+    assert code == 0 and json.loads(out)["max_effort"] < 1000.0  # N, not kN read as N
+    chunk = read_log(log)  # joint type from the units
+    assert chunk.joint_type == "prismatic" and chunk.effort.tolist() == pytest.approx([100.0, 200.0, 150.0])
+    env = tmp_path / "lin.toml"
+    save_envelope(PerformanceEnvelope(max_effort=250.0, max_actuator_velocity=1.0, joint="prismatic"), env)
+    assert _run_cli(["check", str(env), str(log)], capsys)[0] == 0
+    mixed = _write_log(tmp_path / "mixed.csv", "velocity [rpm],effort [N]\n0,1\n1,2\n2,3\n")
+    with pytest.raises(InputError, match="has the unit of a revolute joint but column 'effort \\[N\\]'"):
+        read_log(mixed)
+
+
+def test_curve_reader_keeps_reading_units_with_the_same_helper(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`fit --from-curve` reads `speed (rpm)` and refuses a torque unit on the speed column."""
+    good = _write_log(tmp_path / "curve.csv", "speed (rpm),torque (mNm)\n0,820\n2500,760\n5000,700\n")
+    code, out, _ = _run_cli(["fit", "--from-curve", str(good), "--json"], capsys)
+    assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(0.82)
+    bad = _write_log(tmp_path / "bad.csv", "speed [N*m],torque [mNm]\n0,820\n2500,760\n5000,700\n")
+    err = one_line_error(*_run_cli(["fit", "--from-curve", str(bad)], capsys)[::2])
+    assert "column 'speed [N*m]': unit 'N*m' is not an angular speed" in err
+
+
+def test_check_says_when_time_goes_back(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The user's log `0.2 / 0 / 0.1`: two episodes, 0.1 s (the jump back counts 0), row 2 named."""
+    log = _write_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
+    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log)], capsys)
+    assert code == 0
+    assert "3 samples over 0.1 s in 2 episodes (time goes back 1 time(s), first at row 2)" in out
+    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
+    (joint,) = json.loads(out)["joints"]
+    assert (joint["duration"], joint["time_resets"], joint["first_time_reset"]) == (pytest.approx(0.1), 1, 2)
+
+
+def test_equal_times_are_one_episode(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Repeated time stamps are fine, and the span is last minus first."""
+    log = _write_log(tmp_path / "equal.csv", "time,velocity,effort\n0,0,1\n0,1,1\n0.1,2,2\n0.1,3,2\n")
+    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log)], capsys)
+    assert code == 0 and "4 samples over 0.1 s," in out and "episodes" not in out
+
+
+def test_fit_does_not_depend_on_time_order(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`fit` never reads the time, so a shuffled log fits as the sorted one does."""
+    log = _write_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
+    assert _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)[0] == 0
+
+
+def _spike_log(path: Path) -> Path:
+    """1e5 samples inside (9.2 N*m, 22.53 rad/s, R 0, G 2.44759), 2 % on the boundary, one spike."""
+    rng = np.random.default_rng(0)
+    cap, speed, gradient, n = 9.2, 22.53, 2.44759, 100_000
+    v = rng.uniform(-speed, speed, n)
+    e = rng.uniform(-cap, cap, n)
+    outside = np.abs(v) > speed - gradient * np.abs(e)
+    e[outside] = np.sign(e[outside]) * (speed - np.abs(v[outside])) / gradient * rng.uniform(0, 1, n)[outside]
+    edge = rng.choice(n, n // 50, replace=False)
+    x = rng.uniform(0.0, speed, edge.size)
+    v[edge] = x * rng.choice([-1.0, 1.0], edge.size)
+    e[edge] = np.where(x <= speed - gradient * cap, cap, (speed - x) / gradient) * np.sign(v[edge])
+    v, e = np.append(v, 5.0), np.append(e, 50.0)
+    rows = "".join(
+        f"{t!r},{a!r},{b!r}\n"
+        for t, a, b in zip((np.arange(n + 1) * 1e-3).tolist(), v.tolist(), e.tolist(), strict=True)
+    )
+    return _write_log(path, "time,velocity,effort\n" + rows)
+
+
+def test_fit_warns_when_a_spike_decides_a_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """One spike sets max_effort = 50 (unchanged); the report says so as a warning naming the row."""
+    log = _spike_log(tmp_path / "spike.csv")
+    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0", "--json"], capsys)
+    assert code == 0
+    result = json.loads(out)
+    assert result["max_effort"] == 50.0  # the numbers are what they were
+    warnings = [note for note in result["notes"] if note.startswith("warning: ")]
+    assert len(warnings) == 1
+    assert "eq. 1 (max_effort) rests on one sample, sample 100001" in warnings[0]
+    assert "|effort| 50 N*m" in warnings[0] and "times the largest of all other samples" in warnings[0]
+    assert "--outlier-quantile" in warnings[0]
+    assert not any("no sample below" in note for note in result["notes"])  # ~half the log lies below
+    assert any("no frontier sample below" in note for note in result["notes"])
+    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0", "--outlier-quantile", "0.01"], capsys)
+    assert code == 0 and "warning:" not in out
+    assert (
+        next(line for line in out.splitlines() if line.startswith("max_effort")).split()[1].startswith("9.2")
+    )
+
+
+def test_fit_text_prints_the_warning_as_a_warning_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """In text, the warning is its own `warning:` line, not a `note: warning:` one."""
+    rows = [(0.0, 9.0), (1.0, 9.0), (2.0, 9.0), (3.0, 9.0), (4.0, 30.0), (5.0, 9.0), (6.0, 9.0)]
+    log = _write_log(tmp_path / "log.csv", "velocity,effort\n" + "".join(f"{v},{e}\n" for v, e in rows))
+    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
+    assert code == 0
+    warning = [line for line in out.splitlines() if line.startswith("warning: ")]
+    assert len(warning) == 1
+    assert (
+        "eq. 1 (max_effort) rests on 2 samples, among them sample 5 (|velocity| 4 rad/s, |effort| 30 N*m)"
+        in warning[0]
+    )
+    assert "3.33 times the largest of all other samples (9 N*m)" in warning[0]
+    assert "note: warning" not in out
+
+
+def test_fit_of_a_clean_sweep_and_of_a_curve_give_no_warning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Lines decided by many samples, and a datasheet curve's stall point, are not warned about."""
+    speeds = np.linspace(0.0, 20.0, 41)
+    efforts = np.minimum(10.0, (22.0 - speeds) / 0.5)
+    log = _write_log(
+        tmp_path / "sweep.csv",
+        "velocity,effort\n"
+        + "".join(f"{v!r},{e!r}\n" for v, e in zip(speeds.tolist(), efforts.tolist(), strict=True)),
+    )
+    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
+    assert code == 0 and "warning" not in out
+    curve = _write_log(tmp_path / "c21.csv", "speed [rpm],torque [oz-in]\n3780,0\n3360,38\n3117,60\n0,342\n")
+    code, out, _ = _run_cli(["fit", "--from-curve", str(curve)], capsys)
+    assert code == 0 and "warning" not in out
+
+
+def test_a_row_with_too_many_fields_exits_2(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The user's log, through check and fit: one line naming the row."""
+    log = _write_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
+    for args in (["check", str(bench_envelope_file), str(log)], ["fit", str(log)]):
+        assert "row 2 (line 3): 4 fields" in one_line_error(*_run_cli(args, capsys)[::2])

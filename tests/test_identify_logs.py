@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -157,3 +159,32 @@ def test_identify_bench_header_uses_the_same_rule() -> None:
     assert scales["velocity"] == pytest.approx(2 * 3.141592653589793 / 60)
     with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
         _plan(["time", "position", "target_position", "Velocity", "velocity"], "bench.csv")
+
+
+def test_bench_logs_read_header_units(tmp_path: Path) -> None:
+    """``time [ms]``, ``position [deg]``, ``target_position (deg)``: SI in the BenchLog, like check."""
+    si = _write(tmp_path / "si.csv", "time,position,target_position\n0,0,0.5\n0.01,0.1,0.5\n0.02,0.2,0.5\n")
+    degrees = [0.0, 0.1 * 180 / math.pi, 0.2 * 180 / math.pi]
+    rows = "".join(f"{10 * i},{d!r},{0.5 * 180 / math.pi!r}\n" for i, d in enumerate(degrees))
+    units = _write(tmp_path / "units.csv", "time [ms],position [deg],target_position (deg)\n" + rows)
+    a, b = read_bench_log(si), read_bench_log(units)
+    for column in ("time", "position", "target_position"):
+        np.testing.assert_allclose(getattr(b, column), getattr(a, column), rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        ("time,position [N*m],target_position", "column 'position [N*m]': unit 'N*m'"),
+        ("time,position [deg],target_position [mm]", "the header units are of two joint types"),
+        ("time,position,target_position,torque_enable [V]", "expected no unit (0 or 1 per sample)"),
+    ],
+)
+def test_bench_log_unit_errors_are_one_line(tmp_path: Path, header: str, message: str) -> None:
+    fields = header.count(",") + 1
+    log = _write(
+        tmp_path / "bad.csv", header + "\n" + "".join(",".join(["1"] * fields) + "\n" for _ in range(3))
+    )
+    with pytest.raises(InputError, match=re.escape(message)) as caught:
+        read_bench_log(log)
+    assert "\n" not in str(caught.value)

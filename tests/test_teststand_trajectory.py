@@ -11,6 +11,7 @@ import pytest
 from drive_envelope import InputError
 from drive_envelope._src.scenario.trajectory import (
     Trajectory,
+    read_operating_log,
     read_trajectory,
     save_trajectory,
     trajectory_to_csv,
@@ -204,3 +205,27 @@ def test_header_spaces_are_accepted_and_non_finite_arrays_refused(tmp_path: Path
     assert read_trajectory(path).velocity.tolist() == [1.5]
     with pytest.raises(InputError, match=r"column 'velocity', row 1 is nan"):
         Trajectory(time=np.zeros(2), position=np.zeros(2), velocity=[0.0, np.nan], effort=np.zeros(2))
+
+
+def _write_log(path: Path, text: str) -> Path:
+    """Write a bench log as a new user types it."""
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_operating_log_reader_keeps_the_trajectory_reader_strict(tmp_path: Path) -> None:
+    """The plot's reader needs velocity and effort only; `read_trajectory` still needs position."""
+    log = _write_log(tmp_path / "bench.csv", "time,velocity,effort\n0,0,1\n0.1,5,11\n")
+    points = read_operating_log(log)
+    assert points.velocity.tolist() == [0.0, 5.0] and points.effort.tolist() == [1.0, 11.0]
+    assert points.time is not None and points.time.tolist() == [0.0, 0.1] and points.name == "bench"
+    assert read_operating_log(_write_log(tmp_path / "bare.csv", "velocity,effort\n1,2\n")).time is None
+    with pytest.raises(
+        InputError, match="missing column\\(s\\) position; expected header time,position,velocity,effort"
+    ):
+        read_trajectory(log)
+    with pytest.raises(InputError, match="missing column\\(s\\) effort"):
+        read_operating_log(_write_log(tmp_path / "no_effort.csv", "time,velocity\n0,1\n"))
+    data = {"engine": "bench", "name": "swing", "velocity": [1.0, 2.0], "effort": [3.0, 4.0]}
+    json_log = _write_log(tmp_path / "bench.json", json.dumps(data))
+    assert read_operating_log(json_log).name == "swing" and read_operating_log(json_log).time is None
