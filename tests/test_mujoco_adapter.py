@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -296,3 +297,142 @@ def test_model_drives_lists_every_drive_with_its_numbers(mujoco: Any) -> None:
     )
     assert drives[1].envelope is not None and drives[1].envelope.max_actuator_velocity == float("inf")
     assert (drives[1].stiffness, drives[1].damping, drives[1].dynprm[1]) == (9.0, 1.0, -1.0)
+
+
+# a new user's findings on the MuJoCo adapter: one lookup for every function that takes a drive,
+# joint names, the documented snippet, the reason for a refused MjData
+
+ROOT = Path(__file__).resolve().parents[1]
+TENDON_ARM = """<mujoco model="arm"><compiler angle="radian"/><option timestep="0.002"/>
+<worldbody><body name="l1" pos="0 0 1"><joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
+<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-2 0"/>
+<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="slider" type="slide" axis="1 0 0" range="-0.1 0.1"/>
+<geom type="sphere" size="0.03"/><site name="tip"/></body></body></body></worldbody>
+<tendon><fixed name="t"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="-1"/></fixed></tendon>
+<actuator><position name="ps" joint="shoulder" kp="100" kv="5"/><motor name="el" joint="elbow"/>
+<motor name="sm" joint="slider"/>{extra}</actuator></mujoco>"""
+
+
+def _tendon_arm(tmp_path: Path, extra: str = "") -> Path:
+    """Write the arm (shoulder, elbow, slider; a tendon, a site) as arm.xml, the docs' file name."""
+    path = tmp_path / "arm.xml"
+    path.write_text(TENDON_ARM.format(extra=extra))
+    return path
+
+
+def _driven_arm(mujoco: Any) -> tuple[Any, Any, tuple[Any, ...]]:
+    """The arm with AK80-6 drives on the shoulder and the elbow: spec, model, drives."""
+    from drive_envelope.mujoco import add_drives
+
+    spec = mujoco.MjSpec.from_string(TENDON_ARM.format(extra=""))
+    drives = add_drives(
+        spec, ["shoulder", "elbow"], datasheet="tmotor-ak80-6", stiffness=30, damping=1, replace=True
+    )
+    return spec, spec.compile(), drives
+
+
+def test_drive_state_takes_every_kind_of_drive_reference(mujoco: Any) -> None:
+    """MjDriveInfo from model_drives, MjDrive, actuator name, index (numpy too) and joint name agree."""
+    from drive_envelope.mujoco import drive_state, get_envelope, get_gains, model_drives
+
+    _, model, drives = _driven_arm(mujoco)
+    data = mujoco.MjData(model)
+    drives[1].set_targets(model, data, position=-1.0)
+    mujoco.mj_step(model, data)
+    info = model_drives(model)[1]
+    index = info.actuator
+    refs = [drives[1], info, "el", index, np.int64(index), "elbow"]
+    states = {drive_state(model, data, ref) for ref in refs}
+    assert len(states) == 1 and next(iter(states))[1] != 0.0
+    assert {get_gains(model, ref) for ref in refs} == {(30.0, 1.0)}
+    assert {get_envelope(model, ref).max_effort for ref in refs} == {info.envelope.max_effort}
+
+
+@pytest.mark.parametrize("bad", [1.5, None, ["el"], True])
+def test_a_drive_of_another_type_is_an_input_error_naming_argument_and_type(mujoco: Any, bad: Any) -> None:
+    """Never a TypeError from mj_name2id: one line naming the argument and the type given."""
+    from drive_envelope.mujoco import drive_state, set_envelope
+
+    _, model, _ = _driven_arm(mujoco)
+    data = mujoco.MjData(model)
+    kind = type(bad).__name__
+    with pytest.raises(InputError, match=rf"drive_state: argument 'drive': expected .* got {kind}$"):
+        drive_state(model, data, bad)
+    with pytest.raises(InputError, match=rf"argument 'actuator': expected .* got {kind}$"):
+        set_envelope(model, bad, "tmotor-ak80-6")
+
+
+def test_a_handle_of_another_model_is_refused(mujoco: Any) -> None:
+    """An MjDriveInfo or MjDrive that is not a drive of this model is named, with the model's drives."""
+    from drive_envelope.mujoco import add_drive, drive_state, model_drives, rollout_operating_points
+
+    _, model, _ = _driven_arm(mujoco)
+    spec = mujoco.MjSpec.from_string(TENDON_ARM.format(extra=""))
+    slider = add_drive(spec, "slider", datasheet="actuonix-l16-35-6-r", stiffness=10, damping=1, replace=True)
+    other = spec.compile()
+    with pytest.raises(InputError, match=r"MjDriveInfo 'sm' \(joint 'slider'\) is not a drive of this model"):
+        drive_state(model, mujoco.MjData(model), model_drives(other)[0])
+    with pytest.raises(InputError, match=r"MjDrive 'sm' .* its drives: 'ps', 'el'"):
+        drive_state(model, mujoco.MjData(model), slider)
+    # rollouts find the effort sensor from any reference
+    states = np.zeros((1, 3, 1 + other.nq + other.nv))
+    sensors = np.arange(3.0).reshape(1, 3, 1)
+    velocity, effort = rollout_operating_points(other, "slider", states, sensors)
+    assert effort.tolist() == [[0.0, 1.0, 2.0]] and velocity.shape == (1, 3)
+
+
+def test_the_reason_for_a_refused_mjdata_is_the_warning_before_it(mujoco: Any) -> None:
+    """timestep = 0 after compiling: MuJoCo's FatalError, the plugin's reason just before; documented."""
+    _, model, _ = _driven_arm(mujoco)
+    model.opt.timestep = 0.0
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    try:
+        with pytest.raises(mujoco.FatalError, match="plugin->init failed"):
+            mujoco.MjData(model)
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    assert any("option 'timestep' = 0: expected a finite number > 0 [s]" in w for w in seen)
+    docs = (ROOT / "docs" / "mujoco.md").read_text()
+    assert "initPluginOrFree: plugin->init failed" in docs and "option 'timestep' = 0" in docs
+
+
+def test_the_documented_snippet_runs_as_written(
+    mujoco: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Run the first python block of docs/mujoco.md on an arm whose elbow has a motor named 'el'."""
+    docs = (ROOT / "docs" / "mujoco.md").read_text()
+    snippet = re.search(r"```python\n(.*?)```", docs, flags=re.DOTALL)
+    assert snippet is not None
+    _tendon_arm(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    scope: dict[str, Any] = {}
+    exec(compile(snippet.group(1), "docs/mujoco.md", "exec"), scope)  # our own docs
+    from drive_envelope.mujoco import get_envelope
+
+    assert scope["elbow"].name == "el" and scope["elbow"].replaced == ("el",)
+    assert scope["elbow"].envelope.contains(scope["velocity"], scope["effort"], atol=1e-9).item()
+    assert get_envelope(scope["model"], "el").max_effort == get_envelope(scope["model"], "elbow").max_effort
+    assert get_envelope(scope["model"], "el").max_effort != scope["elbow"].envelope.max_effort
+
+
+def test_set_envelope_and_gains_take_a_joint_name_and_suggest_near_names(mujoco: Any) -> None:
+    """Actuator name first, then the driven joint; an unknown name gets the nearest ones."""
+    from drive_envelope.mujoco import get_gains, set_envelope, set_gains
+
+    _, model, _ = _driven_arm(mujoco)
+    set_gains(model, "elbow", stiffness=12.0)
+    assert get_gains(model, "el") == (12.0, 1.0)
+    set_envelope(model, "shoulder", PerformanceEnvelope(max_effort=3.0))
+    assert model.actuator_dynprm[0, 0] == 3.0
+    with pytest.raises(InputError, match=r"no actuator named 'elbw' and no driven joint .*'elbow'"):
+        set_envelope(model, "elbw", PerformanceEnvelope(max_effort=1.0))
+    with pytest.raises(
+        InputError, match=r"joint 'slider' has no envelope drive; its drives .*'el' on 'elbow'"
+    ):
+        get_gains(model, "slider")
+    with pytest.raises(InputError, match=r"actuator 'sm' is not a drive"):
+        get_gains(model, "sm")

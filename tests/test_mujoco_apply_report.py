@@ -10,6 +10,7 @@ against the Menagerie G1's actuatorfrcrange 50 N*m: (50 - 35) / 50 = 30 %.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import re
 from pathlib import Path
@@ -223,3 +224,186 @@ def test_menagerie_g1_with_the_shipped_map(mujoco: Any, tmp_path: Path, capsys: 
     for _ in range(1000):
         mujoco.mj_step(result, data)
     assert math.isfinite(data.qpos[2]) and abs(data.qpos[2] - 0.79) < 0.03
+
+
+# a new user's findings on the MuJoCo adapter: show lists tendon and site actuators, map errors name
+# the file and key, a missing gain is named, every digit is written, a tighter forcerange is a warning
+
+TENDON_ARM = """<mujoco model="arm"><compiler angle="radian"/><option timestep="0.002"/>
+<worldbody><body name="l1" pos="0 0 1"><joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
+<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-2 0"/>
+<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+<body pos="0.3 0 0"><joint name="slider" type="slide" axis="1 0 0" range="-0.1 0.1"/>
+<geom type="sphere" size="0.03"/><site name="tip"/></body></body></body></worldbody>
+<tendon><fixed name="t"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="-1"/></fixed></tendon>
+<actuator><position name="ps" joint="shoulder" kp="100" kv="5"/><motor name="el" joint="elbow"/>
+<motor name="sm" joint="slider"/>{extra}</actuator></mujoco>"""
+TENDON = '<motor name="tm" tendon="t"/><motor name="twist" site="tip" gear="0 0 0 0 1 0"/>'
+
+
+def _tendon_arm(tmp_path: Path, extra: str = "") -> Path:
+    """Write the arm (shoulder, elbow, slider; a tendon, a site) as arm.xml, the docs' file name."""
+    path = tmp_path / "arm.xml"
+    path.write_text(TENDON_ARM.format(extra=extra))
+    return path
+
+
+def _menagerie(name: str) -> Path:
+    path = MENAGERIE / name
+    if not path.is_file():
+        pytest.skip(f"needs {path} (../shared/data/menagerie, not part of a user's clone)")
+    return path
+
+
+def test_show_lists_tendon_and_site_actuators_that_bypass_drives(
+    mujoco: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A motor on a fixed tendon through two driven joints, a site motor below them: listed, warned once."""
+    arm = _tendon_arm(tmp_path, TENDON)
+    joint_map = tmp_path / "m2.toml"
+    joint_map.write_text('[joints]\nshoulder = "tmotor-ak80-6"\nelbow = "tmotor-ak80-6"\n')
+    out = tmp_path / "o2.xml"
+    assert _cli("mujoco", "apply", str(arm), "--map", str(joint_map), "--stiffness", "10", "--damping", "1",
+                "-o", str(out)) == 0  # fmt: skip
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "also acts on" in line]
+    assert len(lines) == 2, err  # one per actuator, each naming every driven joint it reaches
+    assert "actuator 'tm' (motor on tendon 't') also acts on driven joint(s) 'shoulder' (drive 'ps'), " \
+        "'elbow' (drive 'el')" in lines[0]  # fmt: skip
+    assert "actuator 'twist' (motor on site 'tip')" in lines[1]
+    assert _cli("mujoco", "show", str(out), "--json") == 0
+    others = json.loads(capsys.readouterr().out)["other_actuators"]
+    reached = {(o["actuator"], o["joint"]): o["bypasses_drive"] for o in others}
+    assert reached[("tm", "shoulder")] == "ps" and reached[("tm", "elbow")] == "el"
+    assert reached[("twist", "shoulder")] == "ps" and reached[("twist", "elbow")] == "el"
+    assert reached[("sm", "slider")] is None and ("tm", "slider") not in reached
+    assert next(o for o in others if o["actuator"] == "tm")["transmission"] == "tendon 't'"
+    assert _cli("mujoco", "show", str(out)) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"shoulder\s+tm\s+motor\s+tendon 't'\s+ps", text), text
+
+
+def test_a_map_error_names_the_map_file_and_key(mujoco: Any, tmp_path: Path) -> None:
+    """A revolute envelope on a slide joint: the map file and key, then the joint and the reason."""
+    joint_map = tmp_path / "m.toml"
+    joint_map.write_text('[joints]\nslider = "tmotor-ak80-6"\n')
+    out = tmp_path / "o4.xml"
+    argv = ("mujoco", "apply", str(_tendon_arm(tmp_path)), "--map", str(joint_map), "--stiffness", "10",
+            "--damping", "1", "-o", str(out))  # fmt: skip
+    with pytest.raises(InputError) as info:
+        _cli(*argv)
+    assert str(info.value) == (
+        f"{joint_map}: key 'joints.slider': joint 'slider': the envelope is for a revolute joint but "
+        "'slider' is prismatic"
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("given", "asked"),
+    [
+        (("--stiffness", "60"), "give --damping too (--stiffness is given)"),
+        (("--damping", "2"), "give --stiffness too (--damping is given)"),
+        ((), "give --stiffness and --damping"),
+    ],
+)
+def test_a_motor_without_gains_names_the_missing_one(
+    mujoco: Any, tmp_path: Path, given: tuple[str, ...], asked: str
+) -> None:
+    """Say which of --stiffness and --damping is missing, not both when one was given."""
+    argv = ("mujoco", "apply", str(_tendon_arm(tmp_path)), "--joint", "elbow", "--datasheet", "tmotor-ak80-6",
+            *given, "-o", str(tmp_path / "o.xml"))  # fmt: skip
+    with pytest.raises(
+        InputError, match=re.escape(f"its actuator 'el' is a motor (no position gains to keep); {asked}")
+    ):
+        _cli(*argv)
+
+
+def test_go2_hip_with_only_stiffness_asks_for_damping(mujoco: Any, tmp_path: Path) -> None:
+    """The user's command on the Menagerie Go2."""
+    argv = ("mujoco", "apply", str(_menagerie("go2.xml")), "--joint", "FL_hip_joint", "--datasheet",
+            "tmotor-ak80-6", "--stiffness", "60", "-o", str(tmp_path / "o.xml"))  # fmt: skip
+    with pytest.raises(
+        InputError, match=r"'FL_hip' is a motor .*; give --damping too \(--stiffness is given\)$"
+    ):
+        _cli(*argv)
+
+
+DEGREES = """<mujoco><compiler angle="degree"/><worldbody><body><joint name="j" range="-90 90"
+armature="0.0123456789012345"/><geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"
+mass="0.123456789012345"/></body></worldbody><actuator><position name="a" joint="j" kp="10"/>
+</actuator></mujoco>"""
+
+
+def test_apply_writes_every_number_with_every_digit(mujoco: Any, tmp_path: Path, capsys: Any) -> None:
+    """Degrees become radians with all 17 digits; masses and armatures keep theirs; no notice."""
+    source = tmp_path / "deg.xml"
+    source.write_text(DEGREES)
+    out = tmp_path / "deg_env.xml"
+    assert _cli("mujoco", "apply", str(source), "--joint", "j", "--datasheet", "tmotor-ak80-6",
+                "-o", str(out)) == 0  # fmt: skip
+    assert "digits" not in capsys.readouterr().err
+    original, written = mujoco.MjModel.from_xml_path(str(source)), mujoco.MjModel.from_xml_path(str(out))
+    assert written.jnt_range[0, 1] == 1.5707963267948966 == original.jnt_range[0, 1]
+    assert written.body_mass[1] == original.body_mass[1] and written.dof_armature[0] == 0.0123456789012345
+    text = out.read_text()
+    assert 'range="-1.5707963267948966 1.5707963267948966"' in text and "0000000000" not in text
+
+
+def test_a_writer_that_rounds_is_one_line_on_stderr(
+    mujoco: Any, tmp_path: Path, capsys: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without MuJoCo's precision entry point the written numbers lose digits: say so, on one line."""
+    from drive_envelope._src.adapters.mujoco import precision
+
+    monkeypatch.setattr(precision, "_setter", lambda: None)
+    source = tmp_path / "deg.xml"
+    source.write_text(DEGREES)
+    out = tmp_path / "deg_env.xml"
+    assert _cli("mujoco", "apply", str(source), "--joint", "j", "--datasheet", "tmotor-ak80-6",
+                "-o", str(out)) == 0  # fmt: skip
+    notices = [line for line in capsys.readouterr().err.splitlines() if "digits" in line]
+    assert len(notices) == 1 and re.search(r"differ by up to \S+ relative \(e\.g\. \w+\[", notices[0]), (
+        notices
+    )
+    assert mujoco.MjModel.from_xml_path(str(out)).jnt_range[0, 1] == 1.5708
+
+
+def test_panda_compiles_to_the_same_numbers_after_apply(mujoco: Any, tmp_path: Path) -> None:
+    """The Menagerie Panda's masses, inertias, ranges and geom sizes survive apply exactly."""
+    panda = _menagerie("panda.xml")
+    out = tmp_path / "panda_env.xml"
+    assert _cli("mujoco", "apply", str(panda), "--map", "franka-panda", "-o", str(out)) == 0
+    original, written = mujoco.MjModel.from_xml_path(str(panda)), mujoco.MjModel.from_xml_path(str(out))
+    for field in ("body_mass", "body_inertia", "jnt_range", "geom_size", "body_quat", "body_iquat"):
+        np.testing.assert_allclose(getattr(written, field), getattr(original, field), rtol=1e-12, atol=0)
+
+
+FORCE_RANGE = """<mujoco><worldbody><body><joint name="shoulder" type="hinge"/><geom size="0.1" mass="1"/>
+</body><body pos="1 0 0"><joint name="elbow" type="hinge"/><geom size="0.1" mass="1"/></body></worldbody>
+<actuator><motor name="ms" joint="shoulder" forcerange="-5 5"/>
+<motor name="me" joint="elbow" forcerange="-20 20"/></actuator></mujoco>"""
+
+
+def test_a_tighter_force_range_that_the_drive_replaces_is_a_warning(
+    mujoco: Any, tmp_path: Path, capsys: Any
+) -> None:
+    """The AK80-6's 12 N*m replaces a 5 N*m forcerange (warned) and a 20 N*m one (nothing to say)."""
+    model = tmp_path / "fr.xml"
+    model.write_text(FORCE_RANGE, encoding="utf-8")
+    for joint in ("shoulder", "elbow"):
+        out = tmp_path / f"{joint}.xml"
+        argv = ["mujoco", "apply", str(model), "--joint", joint, "--datasheet", "tmotor-ak80-6",
+                "--stiffness", "10", "--damping", "1", "-o", str(out)]  # fmt: skip
+        assert _cli(*argv) == 0
+        err = capsys.readouterr().err
+        if joint == "shoulder":
+            assert (
+                "actuator 'ms' had forcerange [-5, 5] N*m, tighter than the envelope's max_effort 12 N*m"
+                in err
+            )
+        else:  # not tighter, but 40 % above the cap: the report says the sources disagree
+            assert "had forcerange" not in err
+            rating = "max_effort 12 N*m is 40 % below the model's own rating, 20 N*m (forcerange of 'me')"
+            assert f"{rating} on elbow" in err
