@@ -11,6 +11,7 @@ torch is opt-in (see docs/kernels.md): these tests skip when it is not installed
 from __future__ import annotations
 
 import inspect
+import math
 import subprocess
 import sys
 from typing import Any
@@ -278,3 +279,186 @@ def test_numpy_and_torch_take_a_numpy_integer_dt() -> None:
         EnvelopeTensors.from_envelopes(ENV, dtype=torch.float64), 5.0, 1.0, 0.01, np.int64(1)
     )
     assert float(got) == pytest.approx(expected)
+
+
+# torch dtypes and autograd, zero DOFs, shapes that do not broadcast (kernel findings 1 and 3)
+
+AUTOGRAD_ENV = de.PerformanceEnvelope(
+    max_effort=12.0, max_actuator_velocity=10.0, velocity_dependent_resistance=0.1, speed_effort_gradient=0.5
+)
+
+
+def _torch() -> Any:
+    pytest.importorskip("torch")
+    import drive_envelope.torch as dt
+
+    return dt
+
+
+def _same_no_nan(a: Any, b: Any) -> bool:
+    """Equal element for element (-0.0 equals 0.0), no NaN allowed on either side."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.array_equal(a, b)) and not np.isnan(a).any()
+
+
+def _one_line(error: pytest.ExceptionInfo[InputError], *parts: str) -> None:
+    text = str(error.value)
+    assert "\n" not in text
+    for part in parts:
+        assert part in text, (part, text)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_torch_results_have_the_envelope_dtype(dtype: str) -> None:
+    """Return the EnvelopeTensors' dtype from every effort-level op (float64 is no longer lost)."""
+    dt = _torch()
+    import torch
+
+    kind = getattr(torch, dtype)
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, device="cpu", dtype=kind)
+    x = torch.tensor([5.0, 20.0], dtype=kind)
+    v = torch.tensor([1.0, -3.0], dtype=kind)
+    assert dt.clamp_effort(params, x, v).dtype == kind
+    assert dt.effort_limit(params, v).dtype == kind
+    assert dt.clamp_effort_implicit(params, x, v, torch.ones(2, dtype=kind), 0.01).dtype == kind
+    # host values are read in the envelope's dtype
+    assert dt.clamp_effort(params, [5.0, 20.0], np.array([1.0, -3.0])).dtype == kind
+    if kind == torch.float64:  # the float64 reference's numbers, bit for bit
+        assert _same_no_nan(
+            dt.clamp_effort(params, x, v), de.clamp_effort(AUTOGRAD_ENV, x.numpy(), v.numpy())
+        )
+        implicit = dt.clamp_effort_implicit(params, x, v, 2.0, 0.01)
+        np.testing.assert_allclose(
+            implicit, de.clamp_effort_implicit(AUTOGRAD_ENV, x.numpy(), v.numpy(), 2.0, 0.01)
+        )
+
+
+@pytest.mark.parametrize("bad", ["float64", "float16", "bfloat16", "int64", "bool"])
+def test_torch_refuses_a_tensor_of_another_dtype(bad: str) -> None:
+    """Refuse a tensor whose dtype is not the envelope's, naming the argument and both dtypes."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, device="cpu")  # float32
+    wrong = torch.ones(2).to(getattr(torch, bad))
+    good = torch.ones(2)
+    for call, name in [
+        (lambda: dt.clamp_effort(params, wrong, good), "effort"),
+        (lambda: dt.clamp_effort(params, good, wrong), "velocity"),
+        (lambda: dt.effort_limit(params, wrong), "velocity"),
+        (lambda: dt.clamp_effort_implicit(params, wrong, good, good, 0.01), "requested_effort"),
+        (lambda: dt.clamp_effort_implicit(params, good, good, wrong, 0.01), "response"),
+        (lambda: dt.clamp_effort_implicit(params, good, good, good, 0.01, wrong), "applied_effort"),
+    ]:
+        with pytest.raises(InputError) as error:
+            call()
+        _one_line(error, f"{name}:", f"torch.{bad}", "torch.float32")
+        if getattr(torch, bad).is_floating_point:
+            _one_line(error, f"dtype=torch.{bad}")
+
+
+def test_torch_explicit_clamp_differentiates() -> None:
+    """Let autograd through the explicit clamp: d/d effort 1 inside, 0 clipped; the same numbers."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, device="cpu")
+    v = torch.tensor([0.0, 0.0, 2.0, -2.0, 11.0, math.nan])
+    effort = torch.tensor([5.0, 20.0, -20.0, 3.0, 1.0, 1.0], requires_grad=True)
+    clamped = dt.clamp_effort(params, effort, v)  # was: RuntimeError: maximum(): functions with out=...
+    clamped.sum().backward()
+    assert effort.grad is not None
+    assert effort.grad.tolist() == [1.0, 0.0, 0.0, 1.0, 0.0, 0.0]
+    with torch.no_grad():
+        assert torch.equal(clamped, dt.clamp_effort(params, effort, v))
+    # the reported call
+    x = torch.tensor([5.0, 20.0], requires_grad=True)
+    dt.clamp_effort(params, x, torch.tensor([1.0, 1.0])).sum().backward()
+    assert x.grad is not None and x.grad.tolist() == [1.0, 0.0]
+
+
+def test_torch_gradients_through_velocity_and_parameters() -> None:
+    """Differentiate w.r.t. velocity and envelope tensors (float64 gradcheck), finite at non-finite v."""
+    dt = _torch()
+    import torch
+
+    def clip(max_e: Any, max_v: Any, resist: Any, grad: Any, v: Any) -> Any:
+        params = dt.EnvelopeTensors(
+            max_effort=max_e,
+            max_actuator_velocity=max_v,
+            velocity_dependent_resistance=resist,
+            speed_effort_gradient=grad,
+        )
+        return dt.clamp_effort(params, torch.tensor([30.0, -30.0, 30.0], dtype=torch.float64), v)
+
+    # smooth points: eq. 1 binds at |v| = 1, eq. 2 at |v| = 6 and 9 (away from every kink)
+    args = [
+        torch.tensor(x, dtype=torch.float64, requires_grad=True)
+        for x in ([12.0] * 3, [10.0] * 3, [0.1] * 3, [0.5] * 3, [1.0, -6.0, 9.0])
+    ]
+    assert torch.autograd.gradcheck(clip, args)
+    # a NaN or infinite velocity, or G = 0 (a division by zero in the speed line): finite gradients
+    params = [torch.tensor([12.0, 12.0, 12.0], dtype=torch.float64, requires_grad=True) for _ in range(2)]
+    params += [torch.zeros(3, dtype=torch.float64, requires_grad=True) for _ in range(2)]
+    params[1] = torch.tensor([10.0, math.inf, 10.0], dtype=torch.float64, requires_grad=True)
+    v = torch.tensor([math.nan, math.inf, 3.0], dtype=torch.float64, requires_grad=True)
+    out = clip(*params, v)
+    out.sum().backward()
+    for tensor in [*params, v]:
+        assert tensor.grad is not None and torch.isfinite(tensor.grad).all()
+    assert out.tolist() == [0.0, -12.0, 12.0]
+
+
+def test_torch_no_grad_path_records_nothing() -> None:
+    """Run in place without a graph where nothing requires grad (also under inference_mode)."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, count=4)
+    out = dt.clamp_effort(params, torch.full((4,), 20.0), torch.zeros(4))
+    assert out.grad_fn is None and out.tolist() == [12.0] * 4
+    with torch.inference_mode():
+        assert dt.clamp_effort(params, torch.full((4,), 20.0), torch.zeros(4)).tolist() == [12.0] * 4
+
+
+def test_torch_implicit_clamp_accepts_tensors_requiring_grad() -> None:
+    """Run the implicit clamp on a request that requires grad (no out= there), float64 kept."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, dtype=torch.float64)
+    request = torch.tensor([5.0, 50.0], dtype=torch.float64, requires_grad=True)
+    effort = dt.clamp_effort_implicit(params, request, torch.zeros(2, dtype=torch.float64), 2.0, 0.01)
+    effort.sum().backward()
+    assert effort.dtype == torch.float64 and request.grad is not None
+
+
+def test_torch_accepts_zero_dofs() -> None:
+    """Give (0,) results for an empty batch, as Warp now does."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, count=0)
+    assert params.shape == (0,)
+    empty = torch.zeros(0)
+    assert dt.clamp_effort(params, empty, empty).shape == (0,)
+    assert dt.effort_limit(params, empty).shape == (0,)
+    assert dt.clamp_effort_implicit(params, empty, empty, 2.0, 0.01).shape == (0,)
+
+
+def test_torch_names_shapes_that_do_not_broadcast() -> None:
+    """Refuse shapes that do not broadcast with an InputError naming each shape (was a RuntimeError)."""
+    dt = _torch()
+    import torch
+
+    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, count=5)
+    five, three = torch.zeros(5), torch.zeros(3)
+    for call, where in [
+        (lambda: dt.clamp_effort(params, three, five), "clamp_effort"),
+        (lambda: dt.clamp_effort(params, five, three.requires_grad_(True)), "clamp_effort"),
+        (lambda: dt.effort_limit(params, three), "effort_limit"),
+        (lambda: dt.clamp_effort_implicit(params, five, five, three, 0.01), "clamp_effort_implicit"),
+    ]:
+        with pytest.raises(InputError) as error:
+            call()
+        _one_line(error, where, "(5,)", "(3,)", "broadcast")

@@ -12,6 +12,7 @@ from __future__ import annotations
 import inspect
 import subprocess
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -217,3 +218,50 @@ def test_import_is_light() -> None:
     code = "import sys, drive_envelope.warp\nprint('warp' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+# zero DOFs (kernel finding 3)
+
+ENV = de.PerformanceEnvelope(
+    max_effort=12.0, max_actuator_velocity=10.0, velocity_dependent_resistance=0.1, speed_effort_gradient=0.5
+)
+
+
+def _warp() -> Any:
+    wp = pytest.importorskip("warp")
+    wp.config.quiet = True
+    import drive_envelope.warp as dw
+
+    return dw
+
+
+def _one_line(error: pytest.ExceptionInfo[InputError], *parts: str) -> None:
+    text = str(error.value)
+    assert "\n" not in text
+    for part in parts:
+        assert part in text, (part, text)
+
+
+def test_warp_accepts_zero_dofs() -> None:
+    """Build empty EnvelopeArrays (count 0) and get empty results from every launch."""
+    dw = _warp()
+    import warp as wp
+
+    for params in (
+        dw.EnvelopeArrays.from_envelopes(ENV, count=0, device="cpu"),
+        dw.EnvelopeArrays.from_values(max_effort=1.0, count=0, device="cpu"),
+        dw.EnvelopeArrays.from_values(max_effort=[], device="cpu"),
+    ):
+        assert params.count == 0
+        empty = np.zeros(0, dtype=np.float32)
+        assert dw.effort_limit(params, empty).shape == (0,)
+        assert dw.clamp_effort(params, empty, 0.0).shape == (0,)
+        assert dw.clamp_effort_implicit(params, 1.0, empty, 2.0, 0.01).shape == (0,)
+        out = wp.empty(0, dtype=wp.float32, device="cpu")
+        assert dw.clamp_effort(params, empty, empty, out=out) is out
+    with pytest.raises(InputError) as error:
+        dw.EnvelopeArrays.from_envelopes(ENV, count=-1, device="cpu")
+    _one_line(error, "count", ">= 0", "-1")
+    with pytest.raises(InputError) as error:
+        dw.EnvelopeArrays.from_values(max_effort=1.0, count=-2, device="cpu")
+    _one_line(error, "count", ">= 0", "-2")
