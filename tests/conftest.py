@@ -115,3 +115,13 @@ if _has("hypothesis"):
     settings.register_profile("default", derandomize=True)
     settings.register_profile("explore", derandomize=False)
     settings.load_profile("default")
+
+
+@pytest.fixture
+def bench_envelope_file(tmp_path: Path) -> Path:
+    """An envelope file of 12 N*m, 40 rad/s: the bench logs of the CLI tests lie inside it."""
+    from drive_envelope import PerformanceEnvelope, save_envelope
+
+    path = tmp_path / "env.toml"
+    save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
+    return path

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _bench_logs import run_cli
+from _bench_logs import write_log as write_text_log
 from drive_envelope import PerformanceEnvelope, load_envelope, save_envelope
 from drive_envelope._src.cli.main import main
 from drive_envelope.analysis import read_log
@@ -295,27 +297,6 @@ UNITS_LOG = "time [s],velocity [rpm],effort [mNm]\n0,0,1000\n0.1,100,11000\n0.2,
 SI_LOG = f"time,velocity,effort\n0,0,1\n0.1,{100 * RPM!r},11\n0.2,{200 * RPM!r},9\n"
 
 
-def _write_log(path: Path, text: str) -> Path:
-    """Write a bench log as a new user types it."""
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-@pytest.fixture
-def bench_envelope_file(tmp_path: Path) -> Path:
-    """12 N*m, 40 rad/s: the bench logs below lie inside it."""
-    path = tmp_path / "env.toml"
-    save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
-    return path
-
-
-def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    """Run the CLI: exit status, stdout, stderr."""
-    code = main(args)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
 def one_line_error(code: int, err: str) -> str:
     assert code == 2 and err.startswith("drive-envelope: error:") and err.count("\n") == 1, err
     assert "Traceback" not in err
@@ -324,15 +305,15 @@ def one_line_error(code: int, err: str) -> str:
 
 def test_fit_reads_header_units(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """`fit` on a log in rpm and mNm gives the fit of the same log in SI, not 1000x the effort."""
-    units = _write_log(tmp_path / "units.csv", UNITS_LOG)
-    si = _write_log(tmp_path / "si.csv", SI_LOG)
+    units = write_text_log(tmp_path / "units.csv", UNITS_LOG)
+    si = write_text_log(tmp_path / "si.csv", SI_LOG)
     results = []
     for args in (
         [str(units)],
         [str(units), "--velocity-column", "velocity [rpm]", "--effort-column", "effort [mNm]"],
         [str(si)],
     ):
-        code, out, _ = _run_cli(["fit", *args, "--json", "--bootstrap", "0"], capsys)
+        code, out, _ = run_cli(["fit", *args, "--json", "--bootstrap", "0"], capsys)
         assert code == 0
         results.append(json.loads(out))
     for name in ("max_effort", "velocity_dependent_resistance"):
@@ -345,11 +326,11 @@ def test_check_reads_header_units(
     tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """`check` on a log in rpm and mNm reports what it reports for the same log in SI."""
-    units = _write_log(tmp_path / "units.csv", UNITS_LOG)
-    si = _write_log(tmp_path / "si.csv", SI_LOG)
+    units = write_text_log(tmp_path / "units.csv", UNITS_LOG)
+    si = write_text_log(tmp_path / "si.csv", SI_LOG)
     reports = []
     for log in (units, si):
-        code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
+        code, out, _ = run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
         reports.append((code, json.loads(out)["joints"][0]))
     (code_u, joint_u), (code_si, joint_si) = reports
     assert code_u == code_si == 0  # 11 N*m and 20.9 rad/s: inside 12 N*m and 40 rad/s
@@ -379,24 +360,24 @@ def test_bad_header_units_are_one_line_errors(
 ) -> None:
     """A unit of the wrong dimension or an unknown one names the column and the unit, exit 2."""
     cells = ",".join(["1"] * len(header.split(",")))
-    log = _write_log(tmp_path / "bad.csv", f"{header}\n{cells}\n{cells}\n{cells}\n")
+    log = write_text_log(tmp_path / "bad.csv", f"{header}\n{cells}\n{cells}\n{cells}\n")
     commands = [["check", str(bench_envelope_file), str(log)], ["fit", str(log)]]
     for args in commands[:1] if header.startswith("time [") else commands:  # fit never reads the time
-        err = one_line_error(*_run_cli(args, capsys)[::2])
+        err = one_line_error(*run_cli(args, capsys)[::2])
         assert fragment in err and str(log) in err
 
 
 def test_prismatic_units_follow_the_joint_type(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """mm/s and N read for a prismatic fit and check; rpm with N (two joint types) is refused."""
-    log = _write_log(tmp_path / "lin.csv", "velocity [mm/s],effort [kN]\n0,0.1\n100,0.2\n200,0.15\n")
-    code, out, _ = _run_cli(["fit", str(log), "--joint", "prismatic", "--json", "--bootstrap", "0"], capsys)
+    log = write_text_log(tmp_path / "lin.csv", "velocity [mm/s],effort [kN]\n0,0.1\n100,0.2\n200,0.15\n")
+    code, out, _ = run_cli(["fit", str(log), "--joint", "prismatic", "--json", "--bootstrap", "0"], capsys)
     assert code == 0 and json.loads(out)["max_effort"] < 1000.0  # N, not kN read as N
     chunk = read_log(log)  # joint type from the units
     assert chunk.joint_type == "prismatic" and chunk.effort.tolist() == pytest.approx([100.0, 200.0, 150.0])
     env = tmp_path / "lin.toml"
     save_envelope(PerformanceEnvelope(max_effort=250.0, max_actuator_velocity=1.0, joint="prismatic"), env)
-    assert _run_cli(["check", str(env), str(log)], capsys)[0] == 0
-    mixed = _write_log(tmp_path / "mixed.csv", "velocity [rpm],effort [N]\n0,1\n1,2\n2,3\n")
+    assert run_cli(["check", str(env), str(log)], capsys)[0] == 0
+    mixed = write_text_log(tmp_path / "mixed.csv", "velocity [rpm],effort [N]\n0,1\n1,2\n2,3\n")
     with pytest.raises(InputError, match="has the unit of a revolute joint but column 'effort \\[N\\]'"):
         read_log(mixed)
 
@@ -405,11 +386,11 @@ def test_curve_reader_keeps_reading_units_with_the_same_helper(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """`fit --from-curve` reads `speed (rpm)` and refuses a torque unit on the speed column."""
-    good = _write_log(tmp_path / "curve.csv", "speed (rpm),torque (mNm)\n0,820\n2500,760\n5000,700\n")
-    code, out, _ = _run_cli(["fit", "--from-curve", str(good), "--json"], capsys)
+    good = write_text_log(tmp_path / "curve.csv", "speed (rpm),torque (mNm)\n0,820\n2500,760\n5000,700\n")
+    code, out, _ = run_cli(["fit", "--from-curve", str(good), "--json"], capsys)
     assert code == 0 and json.loads(out)["max_effort"] == pytest.approx(0.82)
-    bad = _write_log(tmp_path / "bad.csv", "speed [N*m],torque [mNm]\n0,820\n2500,760\n5000,700\n")
-    err = one_line_error(*_run_cli(["fit", "--from-curve", str(bad)], capsys)[::2])
+    bad = write_text_log(tmp_path / "bad.csv", "speed [N*m],torque [mNm]\n0,820\n2500,760\n5000,700\n")
+    err = one_line_error(*run_cli(["fit", "--from-curve", str(bad)], capsys)[::2])
     assert "column 'speed [N*m]': unit 'N*m' is not an angular speed" in err
 
 
@@ -417,11 +398,11 @@ def test_check_says_when_time_goes_back(
     tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The user's log `0.2 / 0 / 0.1`: two episodes, 0.1 s (the jump back counts 0), row 2 named."""
-    log = _write_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
-    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log)], capsys)
+    log = write_text_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
+    code, out, _ = run_cli(["check", str(bench_envelope_file), str(log)], capsys)
     assert code == 0
     assert "3 samples over 0.1 s in 2 episodes (time goes back 1 time(s), first at row 2)" in out
-    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
+    code, out, _ = run_cli(["check", str(bench_envelope_file), str(log), "--json"], capsys)
     (joint,) = json.loads(out)["joints"]
     assert (joint["duration"], joint["time_resets"], joint["first_time_reset"]) == (pytest.approx(0.1), 1, 2)
 
@@ -430,15 +411,15 @@ def test_equal_times_are_one_episode(
     tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Repeated time stamps are fine, and the span is last minus first."""
-    log = _write_log(tmp_path / "equal.csv", "time,velocity,effort\n0,0,1\n0,1,1\n0.1,2,2\n0.1,3,2\n")
-    code, out, _ = _run_cli(["check", str(bench_envelope_file), str(log)], capsys)
+    log = write_text_log(tmp_path / "equal.csv", "time,velocity,effort\n0,0,1\n0,1,1\n0.1,2,2\n0.1,3,2\n")
+    code, out, _ = run_cli(["check", str(bench_envelope_file), str(log)], capsys)
     assert code == 0 and "4 samples over 0.1 s," in out and "episodes" not in out
 
 
 def test_fit_does_not_depend_on_time_order(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """`fit` never reads the time, so a shuffled log fits as the sorted one does."""
-    log = _write_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
-    assert _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)[0] == 0
+    log = write_text_log(tmp_path / "unsorted.csv", "time,velocity,effort\n0.2,20,9\n0,0,1\n0.1,5,11\n")
+    assert run_cli(["fit", str(log), "--bootstrap", "0"], capsys)[0] == 0
 
 
 def _spike_log(path: Path) -> Path:
@@ -458,13 +439,13 @@ def _spike_log(path: Path) -> Path:
         f"{t!r},{a!r},{b!r}\n"
         for t, a, b in zip((np.arange(n + 1) * 1e-3).tolist(), v.tolist(), e.tolist(), strict=True)
     )
-    return _write_log(path, "time,velocity,effort\n" + rows)
+    return write_text_log(path, "time,velocity,effort\n" + rows)
 
 
 def test_fit_warns_when_a_spike_decides_a_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """One spike sets max_effort = 50 (unchanged); the report says so as a warning naming the row."""
     log = _spike_log(tmp_path / "spike.csv")
-    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0", "--json"], capsys)
+    code, out, _ = run_cli(["fit", str(log), "--bootstrap", "0", "--json"], capsys)
     assert code == 0
     result = json.loads(out)
     assert result["max_effort"] == 50.0  # the numbers are what they were
@@ -475,7 +456,7 @@ def test_fit_warns_when_a_spike_decides_a_line(tmp_path: Path, capsys: pytest.Ca
     assert "--outlier-quantile" in warnings[0]
     assert not any("no sample below" in note for note in result["notes"])  # ~half the log lies below
     assert any("no frontier sample below" in note for note in result["notes"])
-    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0", "--outlier-quantile", "0.01"], capsys)
+    code, out, _ = run_cli(["fit", str(log), "--bootstrap", "0", "--outlier-quantile", "0.01"], capsys)
     assert code == 0 and "warning:" not in out
     assert (
         next(line for line in out.splitlines() if line.startswith("max_effort")).split()[1].startswith("9.2")
@@ -487,8 +468,8 @@ def test_fit_text_prints_the_warning_as_a_warning_line(
 ) -> None:
     """In text, the warning is its own `warning:` line, not a `note: warning:` one."""
     rows = [(0.0, 9.0), (1.0, 9.0), (2.0, 9.0), (3.0, 9.0), (4.0, 30.0), (5.0, 9.0), (6.0, 9.0)]
-    log = _write_log(tmp_path / "log.csv", "velocity,effort\n" + "".join(f"{v},{e}\n" for v, e in rows))
-    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
+    log = write_text_log(tmp_path / "log.csv", "velocity,effort\n" + "".join(f"{v},{e}\n" for v, e in rows))
+    code, out, _ = run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
     assert code == 0
     warning = [line for line in out.splitlines() if line.startswith("warning: ")]
     assert len(warning) == 1
@@ -506,15 +487,16 @@ def test_fit_of_a_clean_sweep_and_of_a_curve_give_no_warning(
     """Lines decided by many samples, and a datasheet curve's stall point, are not warned about."""
     speeds = np.linspace(0.0, 20.0, 41)
     efforts = np.minimum(10.0, (22.0 - speeds) / 0.5)
-    log = _write_log(
+    log = write_text_log(
         tmp_path / "sweep.csv",
         "velocity,effort\n"
         + "".join(f"{v!r},{e!r}\n" for v, e in zip(speeds.tolist(), efforts.tolist(), strict=True)),
     )
-    code, out, _ = _run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
+    code, out, _ = run_cli(["fit", str(log), "--bootstrap", "0"], capsys)
     assert code == 0 and "warning" not in out
-    curve = _write_log(tmp_path / "c21.csv", "speed [rpm],torque [oz-in]\n3780,0\n3360,38\n3117,60\n0,342\n")
-    code, out, _ = _run_cli(["fit", "--from-curve", str(curve)], capsys)
+    curve_text = "speed [rpm],torque [oz-in]\n3780,0\n3360,38\n3117,60\n0,342\n"
+    curve = write_text_log(tmp_path / "c21.csv", curve_text)
+    code, out, _ = run_cli(["fit", "--from-curve", str(curve)], capsys)
     assert code == 0 and "warning" not in out
 
 
@@ -522,6 +504,6 @@ def test_a_row_with_too_many_fields_exits_2(
     tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The user's log, through check and fit: one line naming the row."""
-    log = _write_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
+    log = write_text_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
     for args in (["check", str(bench_envelope_file), str(log)], ["fit", str(log)]):
-        assert "row 2 (line 3): 4 fields" in one_line_error(*_run_cli(args, capsys)[::2])
+        assert "row 2 (line 3): 4 fields" in one_line_error(*run_cli(args, capsys)[::2])

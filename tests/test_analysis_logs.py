@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drive_envelope import PerformanceEnvelope, save_envelope
+from _bench_logs import write_log
 from drive_envelope._src.analysis.log_model import ColumnPlan
 from drive_envelope._src.analysis.log_units import column_scale, split_header
 from drive_envelope._src.cli.main import main
@@ -317,24 +317,10 @@ RPM = 2.0 * math.pi / 60.0  # rad/s per rev/min
 UNITS_LOG = "time [s],velocity [rpm],effort [mNm]\n0,0,1000\n0.1,100,11000\n0.2,200,9000\n"
 
 
-def _write_log(path: Path, text: str) -> Path:
-    """Write a bench log as a new user types it."""
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-@pytest.fixture
-def bench_envelope_file(tmp_path: Path) -> Path:
-    """12 N*m, 40 rad/s: the bench logs below lie inside it."""
-    path = tmp_path / "env.toml"
-    save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
-    return path
-
-
 @pytest.mark.parametrize("engine", ENGINES)
 def test_header_units_are_converted_to_si(tmp_path: Path, engine: str) -> None:
     """`velocity [rpm]` and `effort [mNm]` are found by their names and read in rad/s and N*m."""
-    chunk = read_log(_write_log(tmp_path / "units.csv", UNITS_LOG), engine=engine)  # type: ignore[arg-type]
+    chunk = read_log(write_log(tmp_path / "units.csv", UNITS_LOG), engine=engine)  # type: ignore[arg-type]
     np.testing.assert_allclose(chunk.velocity, [0.0, 100 * RPM, 200 * RPM], rtol=1e-15)
     np.testing.assert_allclose(chunk.effort, [1.0, 11.0, 9.0], rtol=1e-15)
     np.testing.assert_array_equal(chunk.time, [0.0, 0.1, 0.2])
@@ -345,7 +331,7 @@ def test_header_units_are_converted_to_si(tmp_path: Path, engine: str) -> None:
 def test_header_units_degrees_milliseconds_and_parentheses(tmp_path: Path, engine: str) -> None:
     """deg/s, rpm in parentheses, ms and oz-in headers convert; the full header text selects too."""
     text = "time (ms),qd (deg/s),tau [oz-in]\n0,180,16\n500,360,32\n"
-    path = _write_log(tmp_path / "deg.csv", text)
+    path = write_log(tmp_path / "deg.csv", text)
     columns = LogColumns(velocity="qd", effort="tau [oz-in]")
     chunk = read_log(path, columns, engine=engine)  # type: ignore[arg-type]
     np.testing.assert_allclose(chunk.velocity, [math.pi, 2.0 * math.pi], rtol=1e-12)
@@ -375,7 +361,7 @@ def test_parquet_header_units_are_converted(tmp_path: Path) -> None:
     path = tmp_path / "units.parquet"
     pq.write_table(table, path, row_group_size=2)
     chunk = read_log(path)
-    csv_chunk = read_log(_write_log(tmp_path / "units.csv", UNITS_LOG))
+    csv_chunk = read_log(write_log(tmp_path / "units.csv", UNITS_LOG))
     np.testing.assert_array_equal(chunk.velocity, csv_chunk.velocity)
     np.testing.assert_array_equal(chunk.effort, csv_chunk.effort)
     table_chunk = read_log({"velocity [deg/s]": [90.0, 180.0], "effort": [1.0, 2.0]})  # in memory too
@@ -389,7 +375,7 @@ def test_episodes_are_counted_across_chunk_boundaries(
 ) -> None:
     """Three episodes of 0..3 s, 0..1 s, 0..2 s: 6 s in all, resets at rows 5 and 7, whatever the chunks."""
     times = [0, 1, 2, 3, 0, 1, 0, 1, 2]
-    log = _write_log(tmp_path / "log.csv", "time,velocity,effort\n" + "".join(f"{t},0,0\n" for t in times))
+    log = write_log(tmp_path / "log.csv", "time,velocity,effort\n" + "".join(f"{t},0,0\n" for t in times))
     (joint,) = check_log(bench_envelope_file, log, chunk_rows=chunk_rows, engine=engine).joints
     assert (joint.duration, joint.time_resets, joint.first_time_reset) == (6.0, 2, 5)
 
@@ -400,7 +386,7 @@ def test_episodes_are_per_joint_in_long_format_logs(
 ) -> None:
     """Joints that follow one another each start at 0: no episode; a drop within joint b is one."""
     rows = "a,0,1,1\na,1,1,1\nb,0,1,1\na,2,1,1\nb,1,1,1\nb,0.5,1,1\n"
-    log = _write_log(tmp_path / "long.csv", "joint,time,velocity,effort\n" + rows)
+    log = write_log(tmp_path / "long.csv", "joint,time,velocity,effort\n" + rows)
     a, b = check_log(bench_envelope_file, log, chunk_rows=chunk_rows).joints
     assert (a.duration, a.time_resets) == (2.0, 0)
     assert (b.duration, b.time_resets, b.first_time_reset) == (1.0, 1, 6)
@@ -409,12 +395,12 @@ def test_episodes_are_per_joint_in_long_format_logs(
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_row_with_too_many_fields_names_row_and_line(tmp_path: Path, engine: str) -> None:
     """`0.1,5,11,7` in a 3-column log: both readers name the data row and the line of the file."""
-    log = _write_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
+    log = write_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
     with pytest.raises(
         InputError, match=r"row 2 \(line 3\): 4 fields, the header has 3 \(time, velocity, effort\)"
     ):
         read_log(log, engine=engine)  # type: ignore[arg-type]
-    shifted = _write_log(tmp_path / "shifted.csv", "# bench\ntime,velocity,effort\n0,0,1\n\n0.1,5\n")
+    shifted = write_log(tmp_path / "shifted.csv", "# bench\ntime,velocity,effort\n0,0,1\n\n0.1,5\n")
     with pytest.raises(InputError, match=r"row 2 \(line 5\): 2 fields, the header has 3"):
         read_log(shifted, engine=engine)  # type: ignore[arg-type]
 
@@ -425,9 +411,9 @@ def test_a_number_beyond_the_float_range_is_named_as_written(
     tmp_path: Path, engine: str, chunk_rows: int
 ) -> None:
     """`1e400` is reported with its text (not only as inf); a written `inf` stays `got inf`."""
-    log = _write_log(tmp_path / "big.csv", "time,velocity,effort\n0,0,1\n0.1,-1e400,11\n")
+    log = write_log(tmp_path / "big.csv", "time,velocity,effort\n0,0,1\n0.1,-1e400,11\n")
     with pytest.raises(InputError, match=r"row 2, column 'velocity': got -inf \(the cell reads '-1e400'"):
         list(iter_log(log, chunk_rows=chunk_rows, engine=engine))  # type: ignore[arg-type]
-    written = _write_log(tmp_path / "inf.csv", "time,velocity,effort\n0,0,1\n0.1,inf,11\n")
+    written = write_log(tmp_path / "inf.csv", "time,velocity,effort\n0,0,1\n0.1,inf,11\n")
     with pytest.raises(InputError, match=r"row 2, column 'velocity': got inf; expected a finite number"):
         read_log(written, engine=engine)  # type: ignore[arg-type]

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drive_envelope import InputError, PerformanceEnvelope, save_envelope
+from _bench_logs import run_cli, write_log
+from drive_envelope import InputError, PerformanceEnvelope
 from drive_envelope._src.cli.main import main
 from drive_envelope._src.scenario.spec import load_scenario
 from drive_envelope._src.teststand.engines.reference import simulate
@@ -225,37 +226,16 @@ def test_a_glyph_the_font_lacks_is_one_warning_line(
 # bench logs of a new user: plot -t draws a log without a position column
 
 
-def _write_log(path: Path, text: str) -> Path:
-    """Write a bench log as a new user types it."""
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-@pytest.fixture
-def bench_envelope_file(tmp_path: Path) -> Path:
-    """12 N*m, 40 rad/s: the bench logs below lie inside it."""
-    path = tmp_path / "env.toml"
-    save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
-    return path
-
-
-def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    """Run the CLI: exit status, stdout, stderr."""
-    code = main(args)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
 def test_plot_draws_a_bench_log_without_position(
     tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A log `check` reads (`time,velocity,effort`) is plotted; `velocity,effort` alone too."""
     pytest.importorskip("matplotlib")
-    log = _write_log(tmp_path / "bench.csv", "time,velocity,effort\n0,0,1\n0.1,5,11\n0.2,20,9\n")
-    assert _run_cli(["check", str(bench_envelope_file), str(log)], capsys)[0] == 0
+    log = write_log(tmp_path / "bench.csv", "time,velocity,effort\n0,0,1\n0.1,5,11\n0.2,20,9\n")
+    assert run_cli(["check", str(bench_envelope_file), str(log)], capsys)[0] == 0
     figure = tmp_path / "bench.png"
-    code, _, err = _run_cli(["plot", str(bench_envelope_file), "-t", str(log), "-o", str(figure)], capsys)
+    code, _, err = run_cli(["plot", str(bench_envelope_file), "-t", str(log), "-o", str(figure)], capsys)
     assert code == 0 and figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", err
-    bare = _write_log(tmp_path / "bare.csv", "velocity,effort\n0,1\n5,11\n")
+    bare = write_log(tmp_path / "bare.csv", "velocity,effort\n0,1\n5,11\n")
     argv = ["plot", str(bench_envelope_file), "-t", str(bare), "-o", str(tmp_path / "bare.png")]
-    assert _run_cli(argv, capsys)[0] == 0
+    assert run_cli(argv, capsys)[0] == 0
