@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from _mujoco_plugin import mujoco_with_plugin
+from _mujoco_plugin import TENDON_ARM, mujoco_with_plugin
 from drive_envelope import InputError, PerformanceEnvelope
 
 pytestmark = pytest.mark.mujoco
@@ -303,16 +303,6 @@ def test_model_drives_lists_every_drive_with_its_numbers(mujoco: Any) -> None:
 # joint names, the documented snippet, the reason for a refused MjData
 
 ROOT = Path(__file__).resolve().parents[1]
-TENDON_ARM = """<mujoco model="arm"><compiler angle="radian"/><option timestep="0.002"/>
-<worldbody><body name="l1" pos="0 0 1"><joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
-<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
-<body pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-2 0"/>
-<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
-<body pos="0.3 0 0"><joint name="slider" type="slide" axis="1 0 0" range="-0.1 0.1"/>
-<geom type="sphere" size="0.03"/><site name="tip"/></body></body></body></worldbody>
-<tendon><fixed name="t"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="-1"/></fixed></tendon>
-<actuator><position name="ps" joint="shoulder" kp="100" kv="5"/><motor name="el" joint="elbow"/>
-<motor name="sm" joint="slider"/>{extra}</actuator></mujoco>"""
 
 
 def _tendon_arm(tmp_path: Path, extra: str = "") -> Path:

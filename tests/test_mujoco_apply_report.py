@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from _mujoco_plugin import mujoco_with_plugin
+from _mujoco_plugin import TENDON_ARM, mujoco_with_plugin
 from drive_envelope import InputError
 
 pytestmark = pytest.mark.mujoco
@@ -229,16 +229,6 @@ def test_menagerie_g1_with_the_shipped_map(mujoco: Any, tmp_path: Path, capsys: 
 # a new user's findings on the MuJoCo adapter: show lists tendon and site actuators, map errors name
 # the file and key, a missing gain is named, every digit is written, a tighter forcerange is a warning
 
-TENDON_ARM = """<mujoco model="arm"><compiler angle="radian"/><option timestep="0.002"/>
-<worldbody><body name="l1" pos="0 0 1"><joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
-<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
-<body pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-2 0"/>
-<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
-<body pos="0.3 0 0"><joint name="slider" type="slide" axis="1 0 0" range="-0.1 0.1"/>
-<geom type="sphere" size="0.03"/><site name="tip"/></body></body></body></worldbody>
-<tendon><fixed name="t"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="-1"/></fixed></tendon>
-<actuator><position name="ps" joint="shoulder" kp="100" kv="5"/><motor name="el" joint="elbow"/>
-<motor name="sm" joint="slider"/>{extra}</actuator></mujoco>"""
 TENDON = '<motor name="tm" tendon="t"/><motor name="twist" site="tip" gear="0 0 0 0 1 0"/>'
 
 
