@@ -196,6 +196,28 @@ def test_compute_fills_efforts_like_isaac_lab_and_clips_by_the_envelope() -> Non
     assert articulation.sim_stiffness["legs"] == 0.0  # an explicit actuator: PhysX's drive gains are 0
 
 
+def test_envelope_follows_in_place_edits_and_replaced_tensors() -> None:
+    """The clip's envelope is cached, so both ways a user changes it must reach the next compute()."""
+    import torch
+
+    articulation = _Articulation({"legs": _cfg(effort_limit=12.0, clip="start_of_step")})
+    actuator = articulation.actuators["legs"]
+    shape = (NUM_ENVS, len(JOINTS))
+    q, v = torch.zeros(shape), torch.full(shape, 4.0)
+    articulation.joint_pos_target[:] = 10.0  # the PD law asks 400 N*m: every joint at its limit
+    assert actuator.envelope is actuator.envelope  # one object while nothing changes
+    articulation.apply_actuator_model(q, v)
+    np.testing.assert_array_equal(articulation.applied_torque.numpy(), 12.0)
+    actuator.velocity_dependent_resistance[:] = 0.5  # in place, as the randomization event writes
+    articulation.apply_actuator_model(q, v)
+    np.testing.assert_allclose(articulation.applied_torque.numpy(), 12.0 - 0.5 * 4.0)
+    actuator.max_actuator_velocity = torch.full(shape, 5.0)  # new tensors: the speed line 5 - 0.25*tau
+    actuator.speed_effort_gradient = torch.full(shape, 0.25)  # at v = 4 it allows tau <= 4
+    articulation.apply_actuator_model(q, v)
+    np.testing.assert_allclose(articulation.applied_torque.numpy(), 4.0)
+    assert actuator.envelope.speed_effort_gradient is actuator.speed_effort_gradient
+
+
 def test_two_groups_on_joint_subsets_index_their_own_columns() -> None:
     """Build two groups on disjoint joints (tensor joint_ids) and clip each with its own envelope."""
     import torch
