@@ -28,7 +28,9 @@ bool Inside(const DriveParams& p, double dt, double x, double v) {
 }
 
 // solves a*x = b in place (b becomes x) for a general n x n row-major a, by Gaussian elimination
-// with partial pivoting; false if a is singular
+// with partial pivoting; false if a is singular. Hand-written because the Newton system
+// (I - diag(slope)*A_off) is not symmetric and MuJoCo's public API (mujoco.h, 4.0) factors only
+// symmetric positive definite matrices (mju_cholFactor, used for the SPD block in constrained.cc)
 bool LuSolve(double* a, double* b, int n) {
   for (int k = 0; k < n; k++) {
     int best = k;
@@ -92,7 +94,9 @@ void CoupledSolver::LinearGuess(const mjModel* m, const mjData* d) {
   // v1 = vfree + M^-1 P' w that is (M + P' diag(alpha) P) dv = P' (c - alpha*vfree), v1 = vfree + dv
   // at the rows: M's own sparsity (the tree), factored as MuJoCo factors M (mj_factorI), so no
   // block of M^-1 is needed. Newton and the sweeps then clamp and correct it, so a failed
-  // factorization only costs iterations: it falls back to one Jacobi step from vfree
+  // factorization only costs iterations: it falls back to one Jacobi step from vfree. The loop is
+  // mj_factorI's own because mujoco.h (4.0) has no call that factors a matrix other than d->M:
+  // mj_factorM writes d->qLD, which the constraint solver reads after the drives
   int n = nrow_, nv = m->nv;
   mjtNum* h = h_.data();
   mjtNum* x = delta_.data();
