@@ -1,81 +1,36 @@
-"""PyTorch backend (drive_envelope.torch) against the NumPy reference, on the CPU and CUDA.
+"""PyTorch-only behaviour of drive_envelope.torch: dtypes, autograd, float64 impulses, from_values.
 
-Tolerances: ``clamp_drive_impulse`` on float32 tensors is compared bit for bit with the reference in
-float32 (PhysX's arithmetic) and with PhysX's own results (tests/golden); on float64 tensors bit for
-bit with the float64 reference. The effort-level ops in float32 against the float64 reference:
-``rtol = 1e-5`` plus ``atol = 1e-5`` times the effort scale (implicit: ``1e-4``).
+What every backend does (the impulse and effort ops against the NumPy reference on the CPU and
+CUDA, NaN, zero DOFs, refused input, one signature per name) is tests/test_kernels_backends.py,
+with the backend a parameter. Tolerances: ``clamp_drive_impulse`` is compared bit for bit (the
+compiled kernel with the eager port, float64 tensors with the float64 reference).
 
 torch is opt-in (see docs/kernels.md): these tests skip when it is not installed.
 """
 
 from __future__ import annotations
 
-import inspect
 import math
-import subprocess
-import sys
 from typing import Any
 
 import numpy as np
 import pytest
 
 import drive_envelope as de
-from _kernel_vectors import IMPULSE_ARGS, edge_impulse_args, envelope_cases, physx_golden, random_impulse_args
+from _kernel_vectors import edge_impulse_args, physx_golden, random_impulse_args
 from drive_envelope.errors import InputError
 
 pytestmark = pytest.mark.torch
-
-DEVICES = ["cpu", pytest.param("cuda", marks=pytest.mark.gpu)]
 
 
 def _same(a: Any, b: Any) -> bool:
     return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
 
 
-@pytest.fixture(params=DEVICES)
-def device(request: pytest.FixtureRequest) -> str:
-    return str(request.param)
-
-
 def _tensors(args: list[np.ndarray], device: str) -> list[Any]:
     import torch
 
     return [torch.from_numpy(a).to(device) for a in args]
-
-
-def test_signature_matches_core() -> None:
-    """Keep clamp_drive_impulse's parameters in the core's names and order."""
-    import drive_envelope.torch as dt
-
-    core = list(inspect.signature(de.clamp_drive_impulse).parameters)
-    assert list(inspect.signature(dt.clamp_drive_impulse).parameters) == core
-    assert core[:8] == list(IMPULSE_ARGS)
-
-
-@pytest.mark.parametrize("vectors", ["random", "edge"])
-def test_clamp_drive_impulse_matches_float32_reference(device: str, vectors: str) -> None:
-    """Reproduce the float32 reference bit for bit on random and edge-case vectors (NaN included)."""
-    import drive_envelope.torch as dt
-
-    args = random_impulse_args() if vectors == "random" else edge_impulse_args()
-    for exact in (False, True):
-        result = dt.clamp_drive_impulse(*_tensors(args, device), physx_exact=exact).cpu().numpy()
-        assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32, physx_exact=exact))
-
-
-def test_clamp_drive_impulse_matches_physx_golden(device: str) -> None:
-    """Reproduce real PhysX's float32 results (tests/golden) bit for bit."""
-    import drive_envelope.torch as dt
-
-    golden = physx_golden()
-    if golden is None:
-        pytest.skip("tests/golden/physx_clamp_drive_impulse.npz not present")
-    args, expected = golden
-    exact = dt.clamp_drive_impulse(*_tensors(args, device), physx_exact=True).cpu().numpy()
-    assert _same(exact, expected)
-    assert np.array_equal(exact.view(np.uint32), expected.view(np.uint32))  # zeros' signs, NaN bits
-    guarded = dt.clamp_drive_impulse(*_tensors(args, device)).cpu().numpy()
-    assert _same(guarded, de.clamp_drive_impulse(*args, dtype=np.float32))
 
 
 @pytest.mark.slow
@@ -103,45 +58,6 @@ def test_clamp_drive_impulse_float64_matches_reference() -> None:
     assert _same(exact, de.clamp_drive_impulse(*args, physx_exact=True))
 
 
-@pytest.mark.parametrize("case", envelope_cases(), ids=lambda c: "-".join(sorted(c)))
-def test_effort_ops_match_reference(device: str, case: dict[str, float]) -> None:
-    """Match effort_limit, the explicit clamp and the implicit clamp of the float64 reference."""
-    import torch
-
-    import drive_envelope.torch as dt
-
-    env = de.PerformanceEnvelope(**case)
-    rng = np.random.default_rng(3)
-    n = 4000
-    velocity, effort, applied = (rng.normal(0.0, s, n).astype(np.float32) for s in (4.0, 6.0, 1.0))
-    response = rng.uniform(0.0, 80.0, n).astype(np.float32)
-    v, e, a, r = _tensors([velocity, effort, applied, response], device)
-    params = dt.EnvelopeTensors.from_envelopes(env, count=n, device=device)
-    assert params.dtype == torch.float32 and params.shape == (n,)
-    v64, e64, a64, r64 = (x.astype(np.float64) for x in (velocity, effort, applied, response))
-    atol = 1e-5 * max(env.max_effort, 1.0)
-
-    np.testing.assert_allclose(dt.effort_limit(params, v).cpu(), env.effort_limit(v64), rtol=1e-5, atol=atol)
-    explicit = dt.clamp_effort(params, e, v).cpu()
-    np.testing.assert_allclose(explicit, de.clamp_effort(env, e64, v64), rtol=1e-5, atol=atol)
-    implicit = dt.clamp_effort_implicit(params, e, v, r, 0.01, applied_effort=a).cpu()
-    expected = de.clamp_effort_implicit(env, e64, v64, r64, 0.01, a64)
-    np.testing.assert_allclose(implicit, expected, rtol=1e-4, atol=10 * atol)
-
-
-def test_explicit_clamp_lets_go_on_nan() -> None:
-    """Turn a NaN effort or velocity into 0 (the drive lets go), as the reference does (was: NaN)."""
-    import drive_envelope.torch as dt
-
-    env = de.PerformanceEnvelope(max_effort=2.0, max_actuator_velocity=3.0, speed_effort_gradient=0.5)
-    effort = np.array([np.nan, 1.0, 5.0, 1.0])
-    velocity = np.array([0.0, np.nan, 1.0, 3.0])
-    params = dt.EnvelopeTensors.from_envelopes(env, dtype=np.float64)
-    result = dt.clamp_effort(params, effort, velocity)
-    assert _same(result, de.clamp_effort(env, effort, velocity))
-    assert result.tolist() == [0.0, 0.0, 2.0, 0.0]
-
-
 def test_explicit_ops_broadcast_scalars_and_arrays() -> None:
     """Broadcast scalar and per-DOF arguments either way round, like the reference."""
     import torch
@@ -160,27 +76,8 @@ def test_explicit_ops_broadcast_scalars_and_arrays() -> None:
     np.testing.assert_array_equal(dt.clamp_effort(caps_only, -5.0, 1.0), [-1.0, -2.0, -3.0])
 
 
-def test_bad_input_raises_input_error() -> None:
-    """Reject bad dt, params and dtype with InputError."""
-    import drive_envelope.torch as dt
-
-    with pytest.raises(InputError, match="dt"):
-        dt.clamp_effort_implicit(dt.EnvelopeTensors.from_values(max_effort=1.0), 1.0, 0.0, 1.0, -0.01)
-    with pytest.raises(InputError, match="params"):
-        dt.clamp_effort(1.0, 0.0, 1.0)  # type: ignore[arg-type]
-    with pytest.raises(InputError, match="dtype"):
-        dt.clamp_drive_impulse(0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, dtype=np.int32)
-
-
-def test_import_is_light() -> None:
-    """Import drive_envelope.torch without importing torch."""
-    code = "import sys, drive_envelope.torch\nprint('torch' in sys.modules)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "False"
-
-
 def test_envelope_tensors_build_and_validate() -> None:
-    """Build EnvelopeTensors from envelopes or values (units read once), and reject bad values."""
+    """Build EnvelopeTensors from envelopes or values (units read once); refuse mixed dtypes."""
     import torch
 
     import drive_envelope.torch as dt
@@ -201,12 +98,7 @@ def test_envelope_tensors_build_and_validate() -> None:
     assert grid.shape == (1, 3)
     assert float(grid.max_actuator_velocity) == pytest.approx(2.0 * np.pi)
     assert dt.effort_limit(grid, torch.zeros(4, 3)).shape == (4, 3)
-    with pytest.raises(InputError, match="max_effort"):
-        dt.EnvelopeTensors.from_values(max_effort=[1.0, -1.0])
-    with pytest.raises(InputError, match="angle"):
-        dt.EnvelopeTensors.from_values(max_effort=1.0, max_actuator_velocity="5 Hz")
-    with pytest.raises(InputError, match="broadcast"):
-        dt.EnvelopeTensors.from_values(max_effort=[1.0, 2.0], speed_effort_gradient=[0.1, 0.2, 0.3])
+    # bad values: test_kernels_backends.py::test_bad_values_are_refused_naming_the_value
     with pytest.raises(InputError, match="one dtype"):
         dt.EnvelopeTensors(
             max_effort=torch.zeros(2),
@@ -281,7 +173,7 @@ def test_numpy_and_torch_take_a_numpy_integer_dt() -> None:
     assert float(got) == pytest.approx(expected)
 
 
-# torch dtypes and autograd, zero DOFs, shapes that do not broadcast (kernel findings 1 and 3)
+# torch dtypes and autograd, shapes that do not broadcast under autograd (kernel findings 1 and 3)
 
 AUTOGRAD_ENV = de.PerformanceEnvelope(
     max_effort=12.0, max_actuator_velocity=10.0, velocity_dependent_resistance=0.1, speed_effort_gradient=0.5
@@ -433,32 +325,16 @@ def test_torch_implicit_clamp_accepts_tensors_requiring_grad() -> None:
     assert effort.dtype == torch.float64 and request.grad is not None
 
 
-def test_torch_accepts_zero_dofs() -> None:
-    """Give (0,) results for an empty batch, as Warp now does."""
-    dt = _torch()
-    import torch
+def test_torch_names_shapes_that_do_not_broadcast_under_autograd() -> None:
+    """Name both shapes when a state that requires grad does not broadcast (the recording path).
 
-    params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, count=0)
-    assert params.shape == (0,)
-    empty = torch.zeros(0)
-    assert dt.clamp_effort(params, empty, empty).shape == (0,)
-    assert dt.effort_limit(params, empty).shape == (0,)
-    assert dt.clamp_effort_implicit(params, empty, empty, 2.0, 0.01).shape == (0,)
-
-
-def test_torch_names_shapes_that_do_not_broadcast() -> None:
-    """Refuse shapes that do not broadcast with an InputError naming each shape (was a RuntimeError)."""
+    The other ops and states: test_kernels_backends.py::test_shapes_that_do_not_broadcast_are_named.
+    """
     dt = _torch()
     import torch
 
     params = dt.EnvelopeTensors.from_envelopes(AUTOGRAD_ENV, count=5)
     five, three = torch.zeros(5), torch.zeros(3)
-    for call, where in [
-        (lambda: dt.clamp_effort(params, three, five), "clamp_effort"),
-        (lambda: dt.clamp_effort(params, five, three.requires_grad_(True)), "clamp_effort"),
-        (lambda: dt.effort_limit(params, three), "effort_limit"),
-        (lambda: dt.clamp_effort_implicit(params, five, five, three, 0.01), "clamp_effort_implicit"),
-    ]:
-        with pytest.raises(InputError) as error:
-            call()
-        _one_line(error, where, "(5,)", "(3,)", "broadcast")
+    with pytest.raises(InputError) as error:
+        dt.clamp_effort(params, five, three.requires_grad_(True))
+    _one_line(error, "clamp_effort", "(5,)", "(3,)", "broadcast")
