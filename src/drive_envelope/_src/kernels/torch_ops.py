@@ -12,7 +12,8 @@ two modes. ``physx_exact=True`` follows PhysX select for select (``PxMax(a, b) =
 absolute epsilon ``2^-23``, ``FLT_MAX`` sentinels), so float32 tensors give PhysX's float32
 numbers; the default keeps ``|result| <= max_impulse`` and never returns NaN. Unlike NumPy it has no
 data-dependent branches (every patch is a ``torch.where``), so it runs without host syncs on CUDA
-and ``torch.compile`` fuses it whole (:func:`fused_clamp_drive_impulse`).
+and ``torch.compile`` fuses it whole (:func:`fused_clamp_drive_impulse`). Why it is not one
+array-API implementation shared with NumPy: measured in ``envelope/clamp.py``'s docstring.
 """
 
 from __future__ import annotations
