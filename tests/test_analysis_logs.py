@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from _bench_logs import write_log
-from drive_envelope._src.analysis.log_model import ColumnPlan
+from drive_envelope._src.analysis.log_model import log_plan
 from drive_envelope._src.analysis.log_units import column_scale, split_header
 from drive_envelope._src.cli.main import main
 from drive_envelope.analysis import LogColumns, check_log, iter_log, read_log
@@ -300,12 +300,12 @@ def test_plain_capitalised_header_checks(tmp_path: Path, capsys: pytest.CaptureF
 def test_two_columns_up_to_case_stay_ambiguous_and_joint_column_too() -> None:
     """Refuse 'Velocity,velocity' as today; find a 'Joint' column by its whole header."""
     with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
-        ColumnPlan(["time", "Velocity", "velocity", "effort"], LogColumns(), "log.csv")
+        log_plan(["time", "Velocity", "velocity", "effort"], LogColumns(), "log.csv")
     with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
-        ColumnPlan(["velocity", "VELOCITY [rpm]", "effort"], LogColumns(), "log.csv")
-    plan = ColumnPlan(["Joint", "Velocity", "Effort"], LogColumns(), "log.csv")
-    assert plan.joint and plan.position == {"joint": 0, "velocity": 1, "effort": 2}
-    assert ColumnPlan(["qd", "tau"], LogColumns(velocity="QD", effort="Tau"), "x").position == {
+        log_plan(["velocity", "VELOCITY [rpm]", "effort"], LogColumns(), "log.csv")
+    plan = log_plan(["Joint", "Velocity", "Effort"], LogColumns(), "log.csv")
+    assert "joint" in plan and plan.position == {"joint": 0, "velocity": 1, "effort": 2}
+    assert log_plan(["qd", "tau"], LogColumns(velocity="QD", effort="Tau"), "x").position == {
         "velocity": 0,
         "effort": 1,
     }

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from drive_envelope import InputError
-from drive_envelope._src.identify.logs import _plan, read_bench_log
+from drive_envelope._src.identify.logs import bench_plan, read_bench_log
 from drive_envelope._src.identify.stand import StandWarning, read_stand
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "bam" / "logs"
@@ -68,7 +68,7 @@ def test_parquet_log(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("time,position\n0,0\n1,0\n2,0\n", "missing column(s) 'target_position'"),
+        ("time,position\n0,0\n1,0\n2,0\n", "no column 'target_position' (columns: time, position)"),
         (
             "time,position,target_position\n0,0,0\n1,,0\n2,0,0\n",
             "row 2, column 'position': got an empty cell",
@@ -154,11 +154,11 @@ def test_shipped_bam_stand_reads() -> None:
 
 def test_identify_bench_header_uses_the_same_rule() -> None:
     """Find bench columns up to case with the check's rule; two up to case stay ambiguous."""
-    plan, scales = _plan(["Time", "Position [deg]", "Target_Position [deg]", "Velocity [RPM]"], "bench.csv")
-    assert plan == {"time": 0, "position": 1, "target_position": 2, "velocity": 3}
-    assert scales["velocity"] == pytest.approx(2 * 3.141592653589793 / 60)
+    plan = bench_plan(["Time", "Position [deg]", "Target_Position [deg]", "Velocity [RPM]"], "bench.csv")
+    assert plan.position == {"time": 0, "position": 1, "target_position": 2, "velocity": 3}
+    assert plan.scale["velocity"] == pytest.approx(2 * 3.141592653589793 / 60)
     with pytest.raises(InputError, match="column 'velocity' is ambiguous"):
-        _plan(["time", "position", "target_position", "Velocity", "velocity"], "bench.csv")
+        bench_plan(["time", "position", "target_position", "Velocity", "velocity"], "bench.csv")
 
 
 def test_bench_logs_read_header_units(tmp_path: Path) -> None:

@@ -27,40 +27,16 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.log_csv import csv_header
-from drive_envelope._src.analysis.log_units import find_columns, split_header
 from drive_envelope._src.analysis.logs import LogColumns, ReadEngine, read_log
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import input_file
 
 FloatArray = npt.NDArray[np.float64]
-VELOCITY_ALIASES = ("velocity", "speed", "omega", "v")
-"""Column names accepted for the velocity of a curve when the default column name is absent."""
-EFFORT_ALIASES = ("effort", "torque", "force", "tau")
-"""Column names accepted for the effort of a curve when the default column name is absent."""
-
-
-def _find(
-    cells: list[str], wanted: str, aliases: tuple[str, ...], default: str, label: str, flag: str
-) -> int:
-    """The one column named ``wanted`` up to case (or, for the default name, one of its aliases)."""
-    candidates = [wanted.strip()] + (list(aliases) if wanted == default else [])
-    hits = {candidate: find_columns(cells, candidate) for candidate in candidates}
-    for candidate, found in hits.items():
-        if len(found) > 1:
-            raise InputError(f"{label}: column {candidate!r} appears {len(found)} times")
-    columns = sorted({index for found in hits.values() for index in found})
-    if len(columns) > 1:
-        names = [split_header(cells[index])[0].lower() for index in columns]
-        raise InputError(
-            f"{label}: columns {', '.join(map(repr, names))} could each be the {default}; "
-            f"name the one to use with {flag}"
-        )
-    if not columns:
-        names = [split_header(cell)[0].lower() for cell in cells]
-        raise InputError(f"{label}: no column {wanted!r} (columns: {', '.join(names)}); name it with {flag}")
-    return columns[0]
+VELOCITY_ALIASES = ("speed", "omega", "v")
+"""Other names of a curve's velocity column, looked for beside the default ``velocity``."""
+EFFORT_ALIASES = ("torque", "force", "tau")
+"""Other names of a curve's effort column, looked for beside the default ``effort``."""
 
 
 def read_curve(
@@ -90,17 +66,18 @@ def read_curve(
     file = Path(path)
     label = str(file)
     input_file(file, label)  # a FIFO, a device (/dev/zero) or a file over the text cap: refused unopened
-    # the role-to-column plan: the header is read as check reads it (delimiter, comments, units),
-    # the curve's aliases (speed, torque) pick the names, and the one log reader reads the rows
-    header = csv_header(file, label)[1] if file.suffix.lower() not in (".parquet", ".pq", ".json") else []
-    plan = columns
-    if header:
-        v_col = _find(
-            header, columns.velocity, VELOCITY_ALIASES, LogColumns().velocity, label, "--velocity-column"
-        )
-        e_col = _find(header, columns.effort, EFFORT_ALIASES, LogColumns().effort, label, "--effort-column")
-        plan = replace(columns, velocity=header[v_col], effort=header[e_col])
-    chunk = read_log(file, replace(plan, time=None, joint=None, joint_type=joint), engine=engine)
+    # the one reader and its role-to-column plan; only the aliases (speed, torque) are the curve's,
+    # and only for a default name: a column the user named is that column
+    default = LogColumns()
+    plan = replace(
+        columns,
+        velocity_aliases=VELOCITY_ALIASES if columns.velocity == default.velocity else (),
+        effort_aliases=EFFORT_ALIASES if columns.effort == default.effort else (),
+        time=None,
+        joint=None,
+        joint_type=joint,
+    )
+    chunk = read_log(file, plan, engine=engine)
     if len(chunk) < 3:
         raise InputError(f"{label}: {len(chunk)} points; a curve needs at least 3")
     return chunk.velocity, chunk.effort

@@ -1,7 +1,7 @@
 """Parquet logs (``.parquet``, ``.pq``; need pyarrow) and in-memory tables, read in chunks.
 
 A table is a mapping of column name to array, a pandas DataFrame or a pyarrow Table. Column names
-go through the same :class:`~drive_envelope._src.analysis.log_model.ColumnPlan` as a CSV header
+go through the same :func:`~drive_envelope._src.analysis.log_model.log_plan` as a CSV header
 (a name twice, or one column in two roles, is an error).
 """
 
@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
+from drive_envelope._src.analysis.columns import ColumnPlan
+from drive_envelope._src.analysis.log_model import JointCodes, LogChunk, LogColumns, log_plan, make_chunk
 from drive_envelope._src.errors import InputError
 
 FloatArray = npt.NDArray[np.float64]
@@ -72,7 +73,7 @@ def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -
     except (pa.ArrowException, OSError) as exc:
         raise InputError(f"{label}: cannot read as Parquet: {_one_line(exc)}") from None
     with contextlib.closing(handle):
-        plan = ColumnPlan(handle.schema_arrow.names, columns, label)
+        plan = log_plan(handle.schema_arrow.names, columns, label)
         names = {role: handle.schema_arrow.names[position] for role, position in plan.position.items()}
         codes = JointCodes()
         row = 1
@@ -82,7 +83,9 @@ def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -
                     role: arrow_numeric(batch.column(names[role]), plan.name(role), label)
                     for role in plan.numeric
                 }
-                joint = arrow_joint(batch.column(names["joint"]), codes, plan, row) if plan.joint else None
+                joint = (
+                    arrow_joint(batch.column(names["joint"]), codes, plan, row) if "joint" in plan else None
+                )
                 yield make_chunk(plan, arrays, joint, codes, row)
                 row += batch.num_rows
         except (pa.ArrowException, OSError) as exc:  # a damaged row group
@@ -112,7 +115,7 @@ def _table_column(table: Any, position: int) -> Any:
 
 def iter_table(table: Any, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
     """Chunks of an in-memory table (mapping of arrays, DataFrame, pyarrow Table)."""
-    plan = ColumnPlan(_table_names(table), columns, label)
+    plan = log_plan(_table_names(table), columns, label)
     arrays = {
         role: _table_numeric(_table_column(table, plan.position[role]), plan.name(role), label)
         for role in plan.numeric
@@ -124,7 +127,7 @@ def iter_table(table: Any, columns: LogColumns, chunk_rows: int, label: str) -> 
     total = len(arrays["velocity"])
     codes = JointCodes()
     joint = None
-    if plan.joint:
+    if "joint" in plan:
         raw = _table_column(table, plan.position["joint"])
         if hasattr(raw, "dictionary_encode") or type(raw).__module__.startswith("pyarrow"):
             joint = arrow_joint(raw, codes, plan, 1)

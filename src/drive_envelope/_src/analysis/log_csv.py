@@ -3,7 +3,7 @@
 Two readers give the same chunks: pyarrow's streaming reader (fast, when installed) and the
 standard library's ``csv`` module. Leading ``#`` comment lines and blank lines are skipped; the
 header is read here once, so both readers agree on the column names (spaces around names removed)
-and on the rules of :class:`~drive_envelope._src.analysis.log_model.ColumnPlan`. A damaged file (a
+and on the rules of :func:`~drive_envelope._src.analysis.log_model.log_plan`. A damaged file (a
 truncated ``.gz``, bytes that are not UTF-8, a field over :data:`FIELD_LIMIT` characters) is an
 :class:`InputError` naming the file, and the row where one is known.
 """
@@ -21,8 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from drive_envelope._src.analysis.columns import ColumnPlan
 from drive_envelope._src.analysis.log_arrow import arrow_joint
-from drive_envelope._src.analysis.log_model import ColumnPlan, JointCodes, LogChunk, LogColumns, make_chunk
+from drive_envelope._src.analysis.log_model import JointCodes, LogChunk, LogColumns, log_plan, make_chunk
 from drive_envelope._src.errors import InputError
 
 FIELD_LIMIT = csv.field_size_limit()
@@ -90,12 +91,12 @@ def iter_csv_arrow(path: Path, columns: LogColumns, chunk_rows: int, label: str)
     import pyarrow.csv as pacsv
 
     skip, header, delimiter = csv_header(path, label)
-    plan = ColumnPlan(header, columns, label)
+    plan = log_plan(header, columns, label)
     # columns go by position (names "0", "1", ...): the header was read above, so spaces around names
     # and names pyarrow would refuse (duplicates of columns not read) do not matter
     key = {role: str(position) for role, position in plan.position.items()}
     types: dict[str, Any] = {key[role]: pa.float64() for role in plan.numeric}
-    if plan.joint:
+    if "joint" in plan:
         types[key["joint"]] = pa.dictionary(pa.int32(), pa.string())
     # pyarrow reads about 35 blocks ahead of the consumer: 1 MiB blocks bound that to ~35 MiB
     # whatever the file size (larger blocks parse no faster); batches are cut to chunk_rows below
@@ -114,7 +115,7 @@ def iter_csv_arrow(path: Path, columns: LogColumns, chunk_rows: int, label: str)
         )
         for batch in reader:
             block = {role: batch.column(key[role]).to_numpy(zero_copy_only=False) for role in plan.numeric}
-            if plan.joint:
+            if "joint" in plan:
                 start = row + sum(len(part["velocity"]) for part in pending)
                 block["joint"] = arrow_joint(batch.column(key["joint"]), codes, plan, start)
             pending.append(block)
@@ -158,7 +159,7 @@ def _chunk(
 def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str) -> Iterator[LogChunk]:
     """Chunks of a CSV log read by the standard library's ``csv`` module."""
     skip, header, delimiter = csv_header(path, label)
-    plan = ColumnPlan(header, columns, label)
+    plan = log_plan(header, columns, label)
     codes = JointCodes()
     row = 1
     with _open_text(path) as handle:
@@ -182,9 +183,9 @@ def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str
                         f"{label}: row {row + offset} (line {line}): {len(fields)} fields, the header has "
                         f"{len(header)} ({', '.join(header)})"
                     )
-            arrays = _parse_block(block, plan, row)
+            arrays = parse_cells(block, plan, row)
             joint = None
-            if plan.joint:
+            if "joint" in plan:
                 column = plan.position["joint"]
                 names, inverse = np.unique([fields[column].strip() for fields in block], return_inverse=True)
                 joint = codes.encode(list(names), inverse, plan, row)
@@ -255,8 +256,11 @@ def _parse_floats(block: list[list[str]], column: int) -> tuple[Any, tuple[int, 
         raise
 
 
-def _parse_block(block: list[list[str]], plan: ColumnPlan, first_row: int) -> dict[str, Any]:
-    """The numeric columns of a block of CSV rows; an unreadable cell raises, naming the earliest."""
+def parse_cells(block: list[list[str]], plan: ColumnPlan, first_row: int) -> dict[str, Any]:
+    """The numeric columns of CSV rows, as written; an unreadable cell raises, naming the earliest.
+
+    ``first_row`` is the row number of ``block[0]``; identify's bench logs read their cells here too.
+    """
     arrays: dict[str, Any] = {}
     bad: list[tuple[int, str, str]] = []
     for role in plan.numeric:

@@ -1,6 +1,7 @@
 """The data model of a log and the rules every reader shares: columns, units, finite cells.
 
-A log's header is matched against :class:`LogColumns` once, by :class:`ColumnPlan`: names are
+A log's header is matched against :class:`LogColumns` once, by :func:`log_plan` (the one plan of
+:mod:`.columns`, which identify's bench logs and the curve reader use too): names are
 compared ignoring case and surrounding spaces, so ``Time, Velocity [RPM], Effort`` reads as
 ``time,velocity,effort`` (:func:`~.log_units.find_columns`). A column named twice
 (``time,velocity,velocity,effort``), two names that differ only in case (``Velocity,velocity``), or
@@ -24,8 +25,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.columns import ColumnPlan, Role, plan_columns
 from drive_envelope._src.analysis.log_bag import BagOptions
-from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 
@@ -34,10 +35,6 @@ IntArray = npt.NDArray[np.intp]
 CellText = Callable[[str, int], "str | None"]
 """``text(role, index)``: the text of a chunk's cell as written in the file, or None if unknown."""
 
-ROLES = ("velocity", "effort", "time", "joint")
-"""What a log column can hold, in the order columns are resolved."""
-
-_FLAGS = {role: f"--{role}-column" for role in ROLES}
 _INFINITE = ("inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 
 
@@ -68,6 +65,11 @@ class LogColumns:
     """Joint type the log is read for, which fixes the SI unit a header's unit converts to (rad/s
     and N*m, or m/s and N); a unit of the other type is an error. None: either, as the units say
     (both columns' units must then agree)."""
+    velocity_aliases: tuple[str, ...] = ()
+    """Other names of the velocity column, looked for beside ``velocity`` (the curve reader's ``speed``);
+    two columns that could each be the velocity are an error."""
+    effort_aliases: tuple[str, ...] = ()
+    """Other names of the effort column, looked for beside ``effort`` (the curve reader's ``torque``)."""
     bag: BagOptions | None = None
     """Topics and time source of a ROS 2 bag (:mod:`.log_bag`); None: the bag's only JointState
     topic, no command topic, header stamps."""
@@ -97,94 +99,28 @@ class LogChunk:
         return int(self.velocity.shape[0])
 
 
-class ColumnPlan:
-    """Where each role's column sits in a header, checked for duplicates and double use.
+def log_roles(columns: LogColumns) -> tuple[Role, ...]:
+    """The roles of a (velocity, effort) log as :class:`LogColumns` names them, in the order they resolve."""
+    return (
+        Role(role="velocity", column=columns.velocity, required=True, aliases=columns.velocity_aliases,
+             flag="--velocity-column", quantity="velocity"),
+        Role(role="effort", column=columns.effort, required=True, aliases=columns.effort_aliases,
+             flag="--effort-column", quantity="effort"),
+        Role(role="time", column=columns.time, required=columns.require_time, flag="--time-column",
+             quantity="time"),
+        Role(role="joint", column=columns.joint, required=columns.require_joint, flag="--joint-column",
+             text=True),
+    )  # fmt: skip
 
-    Attributes:
-        header: The header cells, surrounding spaces removed (names with their units).
-        position: Role (``velocity``, ``effort``, ``time``, ``joint``) -> index in ``header``.
-        numeric: The roles read as numbers: velocity, effort and, when present, time.
-        scale: Numeric role -> factor to SI of its values (1.0 without a unit in the header).
-        unit: Numeric role -> the unit written in its header ("" for none).
-        joint_type: The joint type the units imply, or the one asked for; None when nothing tells.
+
+def log_plan(header: Sequence[str], columns: LogColumns, label: str) -> ColumnPlan:
+    """The :class:`~.columns.ColumnPlan` of a log's header for ``columns`` (the one rule of every reader).
+
+    Raises:
+        InputError: a column missing, named twice (up to case) or named for two roles, a bad unit,
+            or units of two joint types (:func:`~.columns.plan_columns`).
     """
-
-    def __init__(self, header: Sequence[str], columns: LogColumns, label: str) -> None:
-        self.header = [str(name).strip() for name in header]
-        self.names = [split_header(name)[0] for name in self.header]
-        self.label = label
-        self.position: dict[str, int] = {}
-        wanted = {
-            "velocity": (columns.velocity, True),
-            "effort": (columns.effort, True),
-            "time": (columns.time, columns.require_time),
-            "joint": (columns.joint, columns.require_joint),
-        }
-        for role in ROLES:
-            name, required = wanted[role]
-            if name is not None:
-                self._resolve(role, str(name).strip(), required)
-        self.numeric: list[str] = [role for role in ("velocity", "effort", "time") if role in self.position]
-        self.scale: dict[str, float] = {}
-        self.unit: dict[str, str] = {}
-        implied: dict[str, JointType] = {}
-        for role in self.numeric:
-            self.unit[role] = split_header(self.name(role))[1]
-            where = f"{label}: column {self.name(role)!r}"
-            self.scale[role], kind = column_scale(role, self.unit[role], columns.joint_type, where)
-            if kind is not None:
-                implied[role] = kind
-        if len(set(implied.values())) > 1:
-            raise InputError(
-                f"{label}: column {self.name('velocity')!r} has the unit of a {implied['velocity']} joint "
-                f"but column {self.name('effort')!r} that of a {implied['effort']} joint; expected one "
-                "joint type (rad/s with N*m, or m/s with N)"
-            )
-        self.joint_type: JointType | None = columns.joint_type or next(iter(implied.values()), None)
-
-    def name(self, role: str) -> str:
-        """The header text of ``role``'s column (with its unit, as written)."""
-        return self.header[self.position[role]]
-
-    @property
-    def joint(self) -> bool:
-        """Whether the log has a joint column."""
-        return "joint" in self.position
-
-    @property
-    def time(self) -> bool:
-        """Whether the log has a time column."""
-        return "time" in self.position
-
-    def _resolve(self, role: str, name: str, required: bool) -> None:
-        """Find ``role``'s column: the one header cell that is ``name`` up to case.
-
-        Its whole text or its name without the unit counts; a joint-name column matches by its
-        whole text only (a unit means a number column).
-        """
-        similar = find_columns(self.header, name, whole=role == "joint")
-        if len(similar) > 1:
-            found = ", ".join(f"{self.header[i]!r} (column {i + 1})" for i in similar)
-            raise InputError(
-                f"{self.label}: column {name!r} is ambiguous: the header has {found}; "
-                "expected each column name once"
-            )
-        if not similar:
-            if required:
-                columns = ", ".join(self.header) or "none"
-                raise InputError(
-                    f"{self.label}: no column {name!r} (columns: {columns}); name it with {_FLAGS[role]}"
-                )
-            return
-        for other, position in self.position.items():
-            if position == similar[0]:
-                if not required:  # a default name (time, joint) taken by an explicit role: not used
-                    return
-                raise InputError(
-                    f"{self.label}: column {name!r} is named by both {_FLAGS[other]} and {_FLAGS[role]}; "
-                    "expected a different column for each"
-                )
-        self.position[role] = similar[0]
+    return plan_columns(header, log_roles(columns), label, joint_type=columns.joint_type)
 
 
 class JointCodes:
@@ -269,6 +205,22 @@ def _to_si(plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: int) -> d
     return scaled
 
 
+def si_arrays(
+    plan: ColumnPlan, arrays: dict[str, FloatArray], first_row: int, text: CellText | None = None
+) -> dict[str, FloatArray]:
+    """``arrays`` (numeric role -> values as written) checked finite and scaled to SI by their units.
+
+    The one cell rule of every reader (identify's bench logs too). ``first_row`` is the row of the
+    arrays' first value; ``text`` gives a cell's written text for messages, when known.
+
+    Raises:
+        InputError: a NaN, empty or infinite cell, or a value its unit takes beyond float range,
+            naming the earliest row and its column.
+    """
+    _check_finite(plan, arrays, first_row, text)
+    return _to_si(plan, arrays, first_row)
+
+
 def make_chunk(
     plan: ColumnPlan,
     arrays: dict[str, FloatArray],
@@ -282,8 +234,7 @@ def make_chunk(
     The values are checked finite and converted to SI by the units in the header. ``text`` gives
     the written text of a cell for messages (a CSV reader's), when known.
     """
-    _check_finite(plan, arrays, first_row, text)
-    arrays = _to_si(plan, arrays, first_row)
+    arrays = si_arrays(plan, arrays, first_row, text)
     time = arrays.get("time")
     return LogChunk(
         velocity=arrays["velocity"],

@@ -4,10 +4,10 @@ A header cell is a name and, optionally, a unit in square brackets or parenthese
 unit gives the scale to SI of every value in that column; a column without a unit is SI. A column
 is found by its name or its whole text up to case (:func:`find_columns`: ``Velocity [RPM]`` is the
 ``velocity`` column); units keep their case, as the unit parser reads them (``RPM``, ``Rpm`` and
-``rpm`` are rpm there, while ``Ms`` and ``ms`` are different units). The log readers
-(:mod:`.log_model`), the curve reader (:mod:`.curve`) and identify's bench logs all use
-:func:`find_columns`, :func:`split_header` and :func:`column_scale`, so ``check``, ``fit``,
-``fit --from-curve`` and ``identify`` accept the same headers.
+``rpm`` are rpm there, while ``Ms`` and ``ms`` are different units). The one column plan
+(:mod:`.columns`) uses :func:`find_columns`, :func:`split_header` and :func:`column_scale` for the
+log readers (:mod:`.log_model`), the curve reader (:mod:`.curve`) and identify's bench logs, so
+``check``, ``fit``, ``fit --from-curve``, ``identify`` and ``replay`` accept the same headers.
 
 SI units per role, by joint type: time [s]; position [rad or m]; velocity [rad/s or m/s]; effort
 [N*m or N]. Angles are explicit (``deg``, ``deg/s``, ``rpm``, ``rev/s``): ``1/s`` and ``Hz`` are

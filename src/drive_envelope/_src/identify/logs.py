@@ -36,9 +36,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.columns import ColumnPlan, Role, plan_columns
 from drive_envelope._src.analysis.log_arrow import arrow_numeric
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
-from drive_envelope._src.analysis.log_csv import csv_rows
+from drive_envelope._src.analysis.log_csv import csv_rows, parse_cells
+from drive_envelope._src.analysis.log_model import si_arrays
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_text
 from drive_envelope._src.io.paths import input_file
@@ -46,9 +48,6 @@ from drive_envelope._src.io.paths import input_file
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
-COLUMNS = ("time", "position", "target_position", "velocity", "effort", "target_velocity", "torque_enable")
-"""Columns a bench log may have, required ones first."""
-_REQUIRED = COLUMNS[:3]
 _GRID_TOLERANCE = 0.01  # a time step may differ from the median step by 1 %
 _PARQUET = (".parquet", ".pq")
 
@@ -144,58 +143,27 @@ def read_bench_log(
     )
 
 
-_ROLES = {
-    "time": "time",
-    "position": "position",
-    "target_position": "position",
-    "velocity": "velocity",
-    "target_velocity": "velocity",
-    "effort": "effort",
-}
-"""The quantity of each column that may carry a unit in its header (``torque_enable`` takes none)."""
+BENCH_ROLES = (
+    Role(role="time", column="time", required=True, quantity="time"),
+    Role(role="position", column="position", required=True, quantity="position"),
+    Role(role="target_position", column="target_position", required=True, quantity="position"),
+    Role(role="velocity", column="velocity", quantity="velocity"),
+    Role(role="effort", column="effort", quantity="effort"),
+    Role(role="target_velocity", column="target_velocity", quantity="velocity"),
+    Role(role="torque_enable", column="torque_enable", meaning="0 or 1 per sample"),
+)
+"""The columns of a bench log as roles of the one column plan: each its own name, its quantity for a
+unit in the header (``torque_enable`` takes none)."""
 
 
-def _plan(header: list[str], label: str) -> tuple[dict[str, int], dict[str, float]]:
-    """Column index and SI scale of each known column.
+def bench_plan(header: list[str], label: str) -> ColumnPlan:
+    """Column index and SI scale of each bench-log column in ``header`` (check's rule and messages).
 
-    A header may give a unit after the name (``position [deg]``, ``time (ms)``), read as the
-    check's logs are (:func:`~drive_envelope._src.analysis.log_units.column_scale`). A name twice (up
-    to case), a missing required column, a bad unit, or units of two joint types are errors.
+    Raises:
+        InputError: a name twice (up to case), missing required columns, a bad unit, or units of
+            two joint types (:func:`~drive_envelope._src.analysis.columns.plan_columns`).
     """
-    from drive_envelope._src.analysis.log_units import column_scale, find_columns, split_header
-
-    plan: dict[str, int] = {}
-    scales: dict[str, float] = {}
-    split = [split_header(name) for name in header]
-    implied: dict[str, str] = {}
-    for column in COLUMNS:
-        hits = find_columns(header, column)  # up to case, as check's and fit's logs
-        if len(hits) > 1:
-            raise InputError(
-                f"{label}: column {column!r} is ambiguous: the header names it {len(hits)} times"
-            )
-        if not hits:
-            continue
-        plan[column] = hits[0]
-        unit = split[hits[0]][1]
-        where = f"{label}: column {header[hits[0]].strip()!r}"
-        if column not in _ROLES:
-            if unit:
-                raise InputError(f"{where}: expected no unit (0 or 1 per sample), got {unit!r}")
-            continue
-        scales[column], joint = column_scale(_ROLES[column], unit, None, where)
-        if joint is not None:
-            implied[column] = joint
-    if len(set(implied.values())) > 1:
-        kinds = ", ".join(f"{column} {kind}" for column, kind in implied.items())
-        raise InputError(f"{label}: the header units are of two joint types ({kinds}); expected one")
-    missing = [column for column in _REQUIRED if column not in plan]
-    if missing:
-        raise InputError(
-            f"{label}: missing column(s) {', '.join(map(repr, missing))}; a bench log needs "
-            f"{', '.join(_REQUIRED)} (optional: {', '.join(COLUMNS[3:])}); found {', '.join(header)}"
-        )
-    return plan, scales
+    return plan_columns(header, BENCH_ROLES, label, needs="a bench log")
 
 
 def _read_bag(file: Path, label: str, options: BagOptions, joint: str | None) -> dict[str, FloatArray]:
@@ -220,48 +188,18 @@ def _read_bag(file: Path, label: str, options: BagOptions, joint: str | None) ->
         if column not in columns:
             what = "the state topic's position" if column == "position" else "a command for this joint"
             raise InputError(f"{label}: joint {chosen.name!r} has no {column}: expected {what}")
-    for column, values in columns.items():
-        _check_finite(values, column, label)
-    return columns
+    plan = bench_plan(list(columns), label)  # SI already: the cell rule only
+    return si_arrays(plan, {column: columns[column] for column in plan.numeric}, 1)
 
 
 def _read_csv(file: Path, label: str) -> dict[str, FloatArray]:
     header, rows = csv_rows(file, label)  # check's CSV rules: comments, delimiter, BOM, .gz
-    plan, scales = _plan(header, label)
-    width = max(plan.values()) + 1
+    plan = bench_plan(header, label)
+    width = max(plan.position.values()) + 1
     for row, fields in enumerate(rows, start=1):
         if len(fields) < width:
             raise InputError(f"{label}: row {row}: {len(fields)} fields, the header has {len(header)}")
-    return {
-        column: _numbers([fields[index] for fields in rows], column, label) * scales.get(column, 1.0)
-        for column, index in plan.items()
-    }
-
-
-def _numbers(cells: list[str], column: str, label: str) -> FloatArray:
-    try:
-        values = np.array(cells, dtype=np.float64)
-    except ValueError:
-        for row, cell in enumerate(cells, start=1):
-            try:
-                float(cell)
-            except ValueError:
-                what = "an empty cell" if not cell.strip() else repr(cell)
-                raise InputError(
-                    f"{label}: row {row}, column {column!r}: got {what}; expected a number"
-                ) from None
-        raise
-    _check_finite(values, column, label)
-    return values
-
-
-def _check_finite(values: FloatArray, column: str, label: str) -> None:
-    bad = np.flatnonzero(~np.isfinite(values))
-    if bad.size:
-        raise InputError(
-            f"{label}: row {int(bad[0]) + 1}, column {column!r}: got {float(values[bad[0]])!r}; "
-            "expected a finite number"
-        )
+    return si_arrays(plan, parse_cells(rows, plan, 1), 1, lambda role, i: rows[i][plan.position[role]])
 
 
 def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
@@ -276,19 +214,14 @@ def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
         table = pq.read_table(file)
     except (OSError, pa.ArrowException) as exc:
         raise InputError(f"{label}: cannot read as Parquet: {' '.join(str(exc).split())}") from None
-    plan, scales = _plan(list(table.column_names), label)
+    plan = bench_plan(list(table.column_names), label)
     columns = {}
-    for column, index in plan.items():
+    for column, index in plan.position.items():
         data = table.column(index)
         if pa.types.is_boolean(data.type):  # torque_enable written as True/False
             data = data.cast(pa.int8())
-        values = arrow_numeric(data, column, label)  # check's type rule for Parquet columns
-        if data.null_count:
-            row = int(np.flatnonzero(data.is_null().to_numpy(zero_copy_only=False))[0]) + 1
-            raise InputError(f"{label}: row {row}, column {column!r}: got an empty cell; expected a number")
-        _check_finite(values, column, label)
-        columns[column] = values * scales.get(column, 1.0)
-    return columns
+        columns[column] = arrow_numeric(data, plan.name(column), label)  # check's type rule; nulls: NaN
+    return si_arrays(plan, columns, 1)
 
 
 def _check_grid(time: FloatArray, label: str) -> None:
