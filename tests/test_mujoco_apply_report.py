@@ -310,6 +310,35 @@ def test_a_motor_without_gains_names_the_missing_one(
         _cli(*argv)
 
 
+NEVER_NEGATIVE = "(a drive gain is never negative)"
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        (("--stiffness", "-60", "--damping", "2"),
+         f"--stiffness '-60': expected a number in [0, 1e12] [N*m/rad] {NEVER_NEGATIVE}, got -60.0"),
+        (("--stiffness", "60", "--damping", "-2"),
+         f"--damping '-2': expected a number in [0, 1e12] [N*m*s/rad] {NEVER_NEGATIVE}, got -2.0"),
+        (("--stiffness", "inf", "--damping", "2"),
+         "--stiffness 'inf': expected a number in [0, 1e12] [N*m/rad], got inf"),
+        (("--stiffness", "60 N", "--damping", "2"), "--stiffness '60 N': "),
+    ],
+)  # fmt: skip
+def test_a_bad_gain_flag_names_the_flag_not_the_map_key(
+    mujoco: Any, tmp_path: Path, given: tuple[str, ...], message: str
+) -> None:
+    """`mujoco apply --map ... --stiffness -60` (issue 26): the flag, its value and range, not the map key."""
+    joint_map = tmp_path / "m.toml"
+    joint_map.write_text('[joints]\nelbow = "tmotor-ak80-6"\n')
+    out = tmp_path / "o.xml"
+    for source in (("--map", str(joint_map)), ("--joint", "elbow", "--datasheet", "tmotor-ak80-6")):
+        with pytest.raises(InputError) as info:
+            _cli("mujoco", "apply", str(_tendon_arm(tmp_path)), *source, *given, "-o", str(out))
+        assert str(info.value).startswith(message) and "\n" not in str(info.value)
+    assert not out.exists()
+
+
 def test_go2_hip_with_only_stiffness_asks_for_damping(mujoco: Any, tmp_path: Path) -> None:
     """The user's command on the Menagerie Go2."""
     argv = ("mujoco", "apply", str(_menagerie("go2.xml")), "--joint", "FL_hip_joint", "--datasheet",

@@ -17,6 +17,7 @@ anything.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import warnings
@@ -203,6 +204,10 @@ def apply_drives(
                 f"{item.where or item.joint}: the model has no hinge or slide joint named "
                 f"{item.joint!r}{_nearest_joints(item.joint, joints)}"
             )
+    # the flags' gains are checked once, naming the flag: a map key would send the user to the map
+    gains = {
+        kind: _flag_gains(stiffness, damping, kind) for kind in {item.envelope.joint for item in assignments}
+    }
     # the gains, control ranges and ratings MuJoCo compiles (dampratio, inheritrange, classes)
     before = _compile_quietly(spec)
     ratings = joint_ratings(before, [item.joint for item in assignments]) if before is not None else {}
@@ -218,8 +223,9 @@ def apply_drives(
             inputs = _inputs_of_instance(spec, actuator.plugin.name)
         if first is not None and feed_forward_motor(existing, first) is not None:
             inputs += ("ff",)  # the motor beside it keeps its slot as the drive's feed-forward
-        k = stiffness if stiffness is not None else (first.stiffness if first else None)
-        c = damping if damping is not None else (first.damping if first else None)
+        given_k, given_c = gains[item.envelope.joint]
+        k = given_k if given_k is not None else (first.stiffness if first else None)
+        c = given_c if given_c is not None else (first.damping if first else None)
         if k is None or c is None:
             what = (
                 f"its actuator {first.name!r} is {describe_kind(first.kind)}"
@@ -272,6 +278,35 @@ def apply_drives(
             )
         )
     return done
+
+
+def _flag_gains(
+    stiffness: float | str | None, damping: float | str | None, joint: str
+) -> tuple[float | None, float | None]:
+    """``--stiffness`` and ``--damping`` in SI for a ``joint`` joint (None where not given).
+
+    Raises:
+        InputError: a value that is not a number with a gain's unit, or outside [0, 1e12], naming
+            the flag and the value as given.
+    """
+    from drive_envelope._src.adapters.mujoco.spec import gain_units
+    from drive_envelope._src.values import read_quantity
+
+    gains: list[float | None] = []
+    for flag, value, unit in zip(
+        ("--stiffness", "--damping"), (stiffness, damping), gain_units(joint, "force"), strict=True
+    ):
+        if value is None:
+            gains.append(None)
+            continue
+        number = read_quantity(value, unit, f"{flag} {value!r}")
+        if not (math.isfinite(number) and 0.0 <= number <= 1e12):
+            why = " (a drive gain is never negative)" if number < 0 else ""
+            raise InputError(
+                f"{flag} {value!r}: expected a number in [0, 1e12] [{unit}]{why}, got {number!r}"
+            )
+        gains.append(number)
+    return gains[0], gains[1]
 
 
 def _nearest_joints(name: str, joints: Sequence[str]) -> str:

@@ -86,7 +86,8 @@ def _resolve_envelope(
     return resolve_envelope(datasheet, where="add_drive: argument 'datasheet'")
 
 
-def _gain_units(joint: str, drive_type: DriveType) -> tuple[str, str]:
+def gain_units(joint: str, drive_type: DriveType) -> tuple[str, str]:
+    """SI units of (stiffness, damping) for a ``"revolute"`` or ``"prismatic"`` joint and a drive type."""
     if drive_type == "acceleration":
         return "1/s**2", "1/s"
     if joint == "revolute":
@@ -217,7 +218,7 @@ def add_drives(
         raise InputError(
             f"{where}: argument 'drive_type': expected 'force' or 'acceleration', got {drive_type!r}"
         )
-    k_unit, c_unit = _gain_units(joint_type, drive_type)
+    k_unit, c_unit = gain_units(joint_type, drive_type)
     k = read_quantity(stiffness, k_unit, f"{where}: argument 'stiffness'")
     c = read_quantity(damping, c_unit, f"{where}: argument 'damping'")
     for label, value, unit in (("stiffness", k, k_unit), ("damping", c, c_unit)):
