@@ -59,3 +59,32 @@ def test_a_row_short_of_a_field_is_refused_as_check_refuses_it(
     assert main(["fit", "--from-curve", str(path)]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "row 2" in err
+
+
+@pytest.mark.parametrize(
+    "text", ["speed [rpm],torque [mNm]\n0,820\n2500,760\n", "Speed;Effort\n0;1\n1;0.5\n"]
+)
+def test_fit_of_a_curve_without_from_curve_says_that_from_curve_reads_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str
+) -> None:
+    """`fit curve.csv` (issue 26): the missing column, then that --from-curve reads such curves."""
+    path = tmp_path / "curve.csv"
+    path.write_text(text)
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and f"{path}: no column 'velocity'" in err
+    hint = f"the columns look like a speed-torque curve: drive-envelope fit --from-curve {path} reads"
+    assert err.endswith(hint + " such curves")
+
+
+@pytest.mark.parametrize(
+    "text", ["time,speed,torque\n0,1,1\n1,2,1\n", "time,position\n0,1\n1,1\n", "speed,current\n0,1\n1,1\n"]
+)
+def test_a_log_that_is_no_curve_gets_no_curve_hint(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str
+) -> None:
+    """A time column, or no effort-like column: a log with other names, not a curve."""
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    assert main(["fit", str(path)]) == 2
+    assert "--from-curve" not in capsys.readouterr().err

@@ -27,6 +27,9 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.analysis.log_csv import csv_header
+from drive_envelope._src.analysis.log_model import log_plan
+from drive_envelope._src.analysis.log_units import find_columns
 from drive_envelope._src.analysis.logs import LogColumns, ReadEngine, read_log
 from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
@@ -66,10 +69,19 @@ def read_curve(
     file = Path(path)
     label = str(file)
     input_file(file, label)  # a FIFO, a device (/dev/zero) or a file over the text cap: refused unopened
-    # the one reader and its role-to-column plan; only the aliases (speed, torque) are the curve's,
-    # and only for a default name: a column the user named is that column
+    chunk = read_log(file, _curve_columns(columns, joint), engine=engine)
+    if len(chunk) < 3:
+        raise InputError(f"{label}: {len(chunk)} points; a curve needs at least 3")
+    return chunk.velocity, chunk.effort
+
+
+def _curve_columns(columns: LogColumns, joint: JointType | None) -> LogColumns:
+    """The columns a curve is read with: the one reader's plan plus the curve's aliases.
+
+    The aliases (speed, torque) apply only to a default name: a column the user named is that column.
+    """
     default = LogColumns()
-    plan = replace(
+    return replace(
         columns,
         velocity_aliases=VELOCITY_ALIASES if columns.velocity == default.velocity else (),
         effort_aliases=EFFORT_ALIASES if columns.effort == default.effort else (),
@@ -77,7 +89,17 @@ def read_curve(
         joint=None,
         joint_type=joint,
     )
-    chunk = read_log(file, plan, engine=engine)
-    if len(chunk) < 3:
-        raise InputError(f"{label}: {len(chunk)} points; a curve needs at least 3")
-    return chunk.velocity, chunk.effort
+
+
+def looks_like_curve(path: str | os.PathLike[str]) -> bool:
+    """Whether a CSV's columns are a curve's: a velocity and an effort by the curve's names, no time.
+
+    ``fit LOG`` says so when it cannot read such a file as a log (``fit --from-curve`` reads it).
+    """
+    file = Path(path)
+    try:
+        header = csv_header(file, str(file))[1]
+        log_plan(header, _curve_columns(LogColumns(), None), str(file))
+    except InputError:
+        return False
+    return not find_columns(header, "time")

@@ -168,7 +168,17 @@ def _run(args: argparse.Namespace) -> int:
     if args.from_curve:
         result = fit_curve(args.from_curve, columns=columns, options=options)
     else:
-        result = fit_log(args.log, columns=columns, options=options, select=args.select)
+        try:
+            result = fit_log(args.log, columns=columns, options=options, select=args.select)
+        except InputError as exc:
+            from drive_envelope._src.analysis.curve import looks_like_curve
+
+            if not looks_like_curve(args.log):
+                raise
+            raise InputError(
+                f"{exc}; the columns look like a speed-torque curve: "
+                f"drive-envelope fit --from-curve {args.log} reads such curves"
+            ) from None
     if output is not None:
         save_envelope(result.envelope, output, force=args.force)
     if args.format == "json":
