@@ -6,6 +6,7 @@ paths of Newton's ``anymal_c.usd`` (read from the file when ``../shared/data`` i
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -68,6 +69,12 @@ def test_bare_name_matches_the_last_part_of_a_prim_path(folder: Path) -> None:
 def test_anymal_paths_from_the_real_asset(folder: Path) -> None:
     """Match the real ANYmal's revolute joints by the DOF name pattern its URDF import uses."""
     pytest.importorskip("pxr")
+    if importlib.util.find_spec("physx_usd_schemas") is not None:
+        # before the first stage: USD builds its schema registry once per process, and the USD
+        # tests that run after this one in the process need the PhysX schemas in it
+        from drive_envelope.usd import register_schemas
+
+        register_schemas()
     from pxr import Usd, UsdPhysics
 
     stage = Usd.Stage.Open(str(SHARED / "newton-assets" / "anymal_c.usd"))
