@@ -60,10 +60,37 @@ def test_listing_shows_the_derived_envelope(capsys: pytest.CaptureFixture[str]) 
     assert item["sources"] and all(url.startswith("https://") for url in item["sources"])
 
 
-def test_no_match_is_a_warning_not_an_error(capsys: pytest.CaptureFixture[str]) -> None:
-    """A filter that matches nothing prints a warning on stderr and exits 0 with an empty list."""
+def test_no_match_is_an_error_naming_the_query(capsys: pytest.CaptureFixture[str]) -> None:
+    """A search that matches nothing exits 2 in one line: the query and how to list (issue 26: was exit 0)."""
+    count = len(catalog_entries())
+    for argv in (["--search", "zzzz"], ["--search", "zzzz", "--json"]):
+        code, out, err = run(capsys, "catalog", *argv)
+        assert code == 2 and out == ""
+        assert err.strip() == (
+            f"drive-envelope: error: catalog --search 'zzzz': no catalog actuator matches; "
+            f"`drive-envelope catalog` lists all {count}"
+        )
     code, out, err = run(capsys, "catalog", "--search", "no such vendor")
-    assert code == 0 and out == "" and "no catalog actuator matches" in err
+    assert code == 2 and out == "" and "no catalog actuator matches" in err
+
+
+@pytest.mark.parametrize(
+    ("search", "hint"),
+    [
+        ("robstride-rs1", "(did you mean 'robstride-rs01'?)"),
+        ("ak-80", "(did you mean --search 'ak80'? it lists cubemars-ak80-9-v3, tmotor-ak80-6)"),
+        ("dynamixel zzzz", "('zzzz' is in no entry)"),
+    ],
+)
+def test_no_match_suggests_the_nearest_entry_or_search(
+    capsys: pytest.CaptureFixture[str], search: str, hint: str
+) -> None:
+    """The nearest key, a corrected word that finds entries, or the word that no entry holds."""
+    code, out, err = run(capsys, "catalog", "--search", search)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert f"catalog --search {search!r}: no catalog actuator matches {hint}; `drive-envelope catalog`" in err
+    _, _, err = run(capsys, "catalog", "--search", "zzzz", "--joint", "prismatic")
+    assert "`drive-envelope catalog --joint prismatic` lists all" in err
 
 
 def test_sources_table_quotes_the_document(capsys: pytest.CaptureFixture[str]) -> None:

@@ -18,6 +18,7 @@ from drive_envelope._src.datasheet.load import datasheet_from_mapping
 from drive_envelope._src.datasheet.spec import Datasheet
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.files import read_mapping
+from drive_envelope._src.validation import nearest_key
 
 _JOINTS = ("revolute", "prismatic")
 
@@ -84,6 +85,39 @@ def catalog_entries(*, joint: str | None = None, search: str | None = None) -> l
         if all(word in text for word in words):
             entries.append(entry)
     return entries
+
+
+def no_match_error(search: str | None, joint: str | None = None) -> InputError:
+    """The one line for ``catalog --search`` that matches nothing: the query and what to try instead.
+
+    The nearest key to the whole query is suggested when it is close (``robstride-rs1`` ->
+    ``robstride-rs01``); else a word no entry holds is replaced by the nearest word of the catalog's
+    keys and names (``ak-80`` -> ``ak80``) when that search finds entries, or named. The line ends
+    with the command that lists every actuator.
+    """
+    entries = catalog_entries(joint=joint)
+    texts = [" ".join([e.key, e.name, e.description, *e.sources]).lower() for e in entries]
+    words = search.lower().split() if search else []
+    vocabulary = sorted(
+        {w for e in entries for w in re.split(r"[^a-z0-9.]+", f"{e.key} {e.name}".lower()) if w}
+    )
+    absent = [word for word in words if not any(word in text for text in texts)]
+    corrected = [
+        next(iter(difflib.get_close_matches(word, vocabulary, 1, 0.6)), "") if word in absent else word
+        for word in words
+    ]
+    found = [e.key for e, text in zip(entries, texts, strict=True) if all(w and w in text for w in corrected)]
+    hint = nearest_key(" ".join(words), [e.key for e in entries], cutoff=0.75)
+    if not hint and found:
+        more = f" and {len(found) - 3} more" if len(found) > 3 else ""
+        hint = f" (did you mean --search {' '.join(corrected)!r}? it lists {', '.join(found[:3])}{more})"
+    elif not hint and absent and len(absent) < len(words):
+        hint = f" ({', '.join(map(repr, absent))} is in no entry)"
+    flag = f" --joint {joint}" if joint else ""
+    return InputError(
+        f"catalog --search {search!r}{flag}: no catalog actuator matches{hint}; "
+        f"`drive-envelope catalog{flag}` lists all {len(entries)}"
+    )
 
 
 def catalog_entry(name: str) -> str | None:

@@ -100,13 +100,15 @@ def _show(name: str, *, sources: bool, as_json: bool) -> int:
 def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
     import json
 
-    from drive_envelope._src.cli.common import warn
-    from drive_envelope._src.datasheet.catalog import catalog_entries, load_catalog_datasheet
+    from drive_envelope._src.datasheet.catalog import catalog_entries, load_catalog_datasheet, no_match_error
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.format import format_table, format_value
 
+    entries = catalog_entries(joint=joint, search=search)
+    if not entries:  # an empty answer to a search is a mistake to fix, not a result (exit 2)
+        raise no_match_error(search, joint)
     rows, items = [], []
-    for entry in catalog_entries(joint=joint, search=search):
+    for entry in entries:
         env = derive(load_catalog_datasheet(entry.key)).envelope
         effort_unit, speed_unit = ("N*m", "rad/s") if entry.joint == "revolute" else ("N", "m/s")
         rows.append(
@@ -138,9 +140,6 @@ def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
                 {"count": len(items), "filters": filters, "actuators": items}, indent=2, ensure_ascii=False
             )
         )
-        return 0
-    if not rows:
-        warn("no catalog actuator matches " + " and ".join(filter(None, [joint, search and repr(search)])))
         return 0
     print(format_table(["key", "joint", "max_effort", "max_velocity", "name"], rows))
     print(
