@@ -162,6 +162,9 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
     v->assign(n, 0);
   }
   q_.assign(n * n, 0);
+  sym_rows_.reserve(n);
+  sym_h_.reserve(n * n);
+  sym_b_.reserve(n);
   free_.reserve(n);
   fixed_.reserve(n);
   effort_.assign(drives_.size(), 0);

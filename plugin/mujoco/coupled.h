@@ -138,6 +138,8 @@ class CoupledSolver {
   std::vector<char> stale_, warned_;
   std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
   std::vector<double> rest_, slope_;
+  std::vector<int> sym_rows_;            // Newton: the rows of the symmetric system (SymmetricSolve)
+  std::vector<mjtNum> sym_h_, sym_b_;    // its matrix and right side
   std::vector<RowResult> result_;
   std::vector<ImplicitDriveDesc> desc_;  // per row, the step's drive law (pgs/tgs)
   std::vector<double> adiag_;            // per row, A_rr (Response; a_ only after FullResponse)

@@ -57,6 +57,40 @@ bool LuSolve(double* a, double* b, int n) {
   return true;
 }
 
+// the Newton system (I - diag(slope)*A_off) w = rhs as a symmetric one, where no slope is
+// positive: a row with slope 0 reads w_r = rhs_r; dividing row r by t_r = -slope_r > 0 gives
+// H w = b with H = diag(1/t) + A_off, symmetric as A is, and positive definite in the common case
+// (an unclamped row has 1/t_r = A_rr + 1/alpha_r). MuJoCo's Cholesky then does half of LuSolve's
+// work. False (rhs untouched; the caller runs LuSolve) where a slope is positive or not finite,
+// or H is not positive definite
+bool SymmetricSolve(const double* a, const double* slope, double* rhs, int n, std::vector<int>* rows,
+                    std::vector<mjtNum>* h, std::vector<mjtNum>* b) {
+  rows->clear();
+  for (int r = 0; r < n; r++) {
+    if (!(slope[r] <= 0)) return false;
+    if (slope[r] < 0) rows->push_back(r);
+  }
+  int count = static_cast<int>(rows->size());
+  h->resize(static_cast<size_t>(count) * count);
+  b->resize(count);
+  for (int i = 0; i < count; i++) {
+    int r = (*rows)[i];
+    double t = -slope[r];
+    double known = 0;  // the rows with slope 0 are fixed: their terms move to the right side
+    for (int s = 0; s < n; s++) {
+      if (s != r && slope[s] == 0) known += a[r * n + s] * rhs[s];
+    }
+    (*b)[i] = rhs[r] / t - known;
+    for (int j = 0; j < count; j++) (*h)[i * count + j] = i == j ? 1 / t : a[r * n + (*rows)[j]];
+  }
+  if (count > 0) {
+    if (mju_cholFactor(h->data(), count, mjMINVAL) < count) return false;
+    mju_cholSolve(b->data(), h->data(), b->data(), count);
+  }
+  for (int i = 0; i < count; i++) rhs[(*rows)[i]] = (*b)[i];
+  return true;
+}
+
 }  // namespace
 
 void CoupledSolver::Prepare(const mjData* d, double dt) {
@@ -270,11 +304,15 @@ bool CoupledSolver::Newton(const mjData* d, double dt, int* iterations) {
       slope_[r] = slope_x - hd * (shrink + response * shrink * slope_x);
     }
     for (int r = 0; r < n; r++) {
-      const double* row = a_.data() + r * n;
-      for (int s = 0; s < n; s++) q_[r * n + s] = (s == r ? 1 : 0) - (s == r ? 0 : slope_[r] * row[s]);
       rhs_[r] = result_[r].x + result_[r].y - slope_[r] * (rest_[r] - vfree_[r]);
     }
-    if (!LuSolve(q_.data(), rhs_.data(), n)) return false;
+    if (!SymmetricSolve(a_.data(), slope_.data(), rhs_.data(), n, &sym_rows_, &sym_h_, &sym_b_)) {
+      for (int r = 0; r < n; r++) {
+        const double* row = a_.data() + r * n;
+        for (int s = 0; s < n; s++) q_[r * n + s] = (s == r ? 1 : 0) - (s == r ? 0 : slope_[r] * row[s]);
+      }
+      if (!LuSolve(q_.data(), rhs_.data(), n)) return false;
+    }
     for (int r = 0; r < n; r++) {
       if (!std::isfinite(rhs_[r])) return false;
       // keep the split of the new total impulse; only the sum matters for the next step
