@@ -18,6 +18,7 @@ import importlib.util
 import sys
 import types
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -125,3 +126,23 @@ def bench_envelope_file(tmp_path: Path) -> Path:
     path = tmp_path / "env.toml"
     save_envelope(PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=40.0, name="demo"), path)
     return path
+
+
+@pytest.fixture(scope="session")
+def bundled_physx_runs() -> dict[str, Any]:
+    """Every bundled scenario (examples/scenarios/*.toml) run once on PhysX, by file stem.
+
+    Once per test run: tests/test_teststand_physx.py and tests/test_parity_engines.py both hold
+    the reference to these runs (one PhysX instance; run one by one they are the same bit for bit).
+    """
+    pytest.importorskip("ovphysx")
+    import warnings
+
+    from drive_envelope._src.scenario.spec import load_scenario
+    from drive_envelope._src.teststand.engines import physx
+
+    paths = sorted((Path(__file__).resolve().parents[1] / "examples" / "scenarios").glob("*.toml"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # authoring and ovphysx notes about the stand's stage
+        runs = physx.simulate_many([load_scenario(path) for path in paths])
+    return {path.stem: run for path, run in zip(paths, runs, strict=True)}

@@ -11,14 +11,12 @@ relative to each column's range.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 
 from drive_envelope._src.scenario.spec import load_scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
-from drive_envelope._src.teststand.engines import engine_module
 from drive_envelope._src.teststand.engines.reference import simulate
 
 pytestmark = [pytest.mark.physx, pytest.mark.usd, pytest.mark.slow]
@@ -27,23 +25,13 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 PATHS = sorted(EXAMPLES.glob("*.toml"))
 
 
-@pytest.fixture(scope="module")
-def physx_runs() -> dict[str, Trajectory]:
-    """Every bundled scenario run once on PhysX, on one PhysX instance."""
-    module: Any = engine_module("physx")
-    scenarios = [load_scenario(path) for path in PATHS]
-    runs = (
-        module.simulate_many(scenarios)
-        if hasattr(module, "simulate_many")
-        else map(module.simulate, scenarios)
-    )
-    return {path.stem: run for path, run in zip(PATHS, runs, strict=True)}
-
-
 @pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
-def test_reference_matches_physx(path: Path, physx_runs: dict[str, Trajectory]) -> None:
-    """Match the reference engine's position, velocity and effort to PhysX's at float32-level precision."""
-    reference, physx = simulate(load_scenario(path)), physx_runs[path.stem]
+def test_reference_matches_physx(path: Path, bundled_physx_runs: dict[str, Trajectory]) -> None:
+    """Match the reference engine's position, velocity and effort to PhysX's at float32-level precision.
+
+    PhysX's runs are made once per test run (tests/conftest.py), for tests/test_parity_engines.py too.
+    """
+    reference, physx = simulate(load_scenario(path)), bundled_physx_runs[path.stem]
     for column in ("position", "velocity", "effort"):
         ours, theirs = getattr(reference, column), getattr(physx, column)
         scale = max(1.0, float(np.max(np.abs(ours))))
