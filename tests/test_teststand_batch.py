@@ -2,8 +2,9 @@
 
 Every element of one batch is a different stand (drive kind, envelope, friction, pendulum,
 armature, loads) run through a schedule with unpowered spans; each must equal
-``reference.simulate`` of the same scenario to ~1e-12 (both are float64; only the order of a few
-sums differs), on PGS and TGS with and without velocity iterations.
+``reference.simulate`` of the same scenario (a batch of one, built from the scenario by the
+engine, not by this file's ``_stand``) to ~1e-12, on PGS and TGS with and without velocity
+iterations. An element that overflows is flagged with the step and what overflowed.
 """
 
 from __future__ import annotations
@@ -18,7 +19,15 @@ from drive_envelope import PerformanceEnvelope
 from drive_envelope._src.scenario.loads import FrictionSpec, PendulumSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import DriveSpec, JointSpec, LoadSpec, Scenario, SimulationSpec
-from drive_envelope._src.teststand.batch import BatchSolver, BatchStand, simulate_batch
+from drive_envelope._src.teststand.batch import (
+    OVERFLOW_LAW,
+    OVERFLOW_REQUEST,
+    OVERFLOW_STATE,
+    BatchResult,
+    BatchSolver,
+    BatchStand,
+    simulate_batch,
+)
 from drive_envelope._src.teststand.engines import reference
 
 ENV = PerformanceEnvelope(
@@ -175,3 +184,79 @@ def test_a_diverging_element_is_flagged_not_fatal() -> None:
     )
     assert result.diverged.tolist() == [False, True]
     assert np.isfinite(result.position[:, 0]).all() and np.isnan(result.position[-1, 1])
+
+
+def _run(stand: BatchStand, steps: int, **options: object) -> BatchResult:
+    return simulate_batch(
+        BatchSolver(dt=0.005),
+        stand,
+        initial_position=0.1,
+        initial_velocity=0.0,
+        target_position=np.full(steps, 1.0),
+        target_velocity=np.full(steps, 5.0),
+        enabled=np.ones(steps),
+        **options,  # type: ignore[arg-type]
+    )
+
+
+def test_a_non_finite_drive_law_or_request_diverges_although_the_state_is_finite() -> None:
+    """Flag the law (even of a drive that is off) and an infinite request, whose clamp is finite."""
+    good = _scenario("good", {}, "pgs", (1, 0))
+    stand = _stand([good, good, good])
+    broken = dataclasses.replace(
+        stand,
+        damping=np.array([0.03, 1e308, 0.03]),  # dt*damping*target_velocity overflows
+        max_effort=np.array([0.6, 0.0, 0.6]),
+        external_effort=np.array([0.0, 0.0, 1e308]),  # a finite push, an infinite request
+        inertia=np.array([2e-3, 2e-3, 1e-10]),
+    )
+    result = _run(broken, 40)
+    assert result.diverged.tolist() == [False, True, True]
+    assert result.diverged_step.tolist() == [-1, 0, 0]
+    assert result.overflow.tolist() == [0, OVERFLOW_LAW, OVERFLOW_REQUEST]
+    assert np.isfinite(result.position[:, 0]).all()
+    assert np.isnan(result.position[1:, 1:]).all() and (result.position[0, 1:] == 0.1).all()
+
+
+def test_the_diverging_step_is_the_first_whose_state_overflows() -> None:
+    """Name the step from which the state is not finite; rows up to it keep their values."""
+    good = _scenario("good", {}, "pgs", (1, 0))
+    stand = dataclasses.replace(
+        _stand([good, good]), max_effort=np.array([0.6, 0.0]), external_effort=np.array([0.0, 1e305])
+    )
+    # the velocity grows by 1e305 / 2e-3 * 0.005 = 2.5e305 a step, the position after n steps is
+    # n * (n + 1) / 2 * 0.005 * 2.5e305: 1.792e308 after 535, beyond float64's 1.798e308 after 536
+    result = _run(stand, 1000)
+    assert result.overflow.tolist() == [0, OVERFLOW_STATE]
+    assert result.diverged_step.tolist() == [-1, 535]
+    assert result.position[535, 1] == pytest.approx(535 * 536 / 2 * 0.005 * 2.5e305)
+    assert np.isnan(result.position[536:, 1]).all() and np.isfinite(result.position[:, 0]).all()
+    assert _run(stand, 535).diverged.tolist() == [False, False]
+    assert _run(stand, 536).diverged.tolist() == [False, True]
+
+
+def test_progress_every_4096_steps_and_a_batch_that_all_diverged_stops() -> None:
+    """Report (done, steps) every 4096 steps and at the end; stop once every element diverged."""
+    good = _scenario("good", {}, "pgs", (1, 0))
+    calls: list[tuple[int, int]] = []
+    _run(_stand([good]), 9000, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(4096, 9000), (8192, 9000), (9000, 9000)]
+    calls.clear()
+    broken = dataclasses.replace(
+        _stand([good]), max_effort=np.array([0.0]), external_effort=np.array([1e306])
+    )
+    result = _run(broken, 9000, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [] and result.diverged.tolist() == [True] and np.isnan(result.position[-1]).all()
+
+
+def test_an_envelope_without_effort_limit_keeps_its_speed_line() -> None:
+    """max_effort inf with a finite max_actuator_velocity still clamps (only inf, inf skips the clamp)."""
+    good = _scenario("good", {}, "pgs", (1, 0))
+    stand = dataclasses.replace(
+        _stand([good, good]),
+        max_effort=np.array([math.inf, math.inf]),
+        max_actuator_velocity=np.array([3.0, math.inf]),
+        damping=np.array([20.0, 20.0]),
+    )
+    result = _run(stand, 200)
+    assert result.velocity[:, 0].max() <= 3.0 + 1e-12 < result.velocity[:, 1].max()

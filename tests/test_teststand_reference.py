@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drive_envelope import PerformanceEnvelope, implicit_drive_effort
+from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.spec import Scenario, scenario_from_mapping
 from drive_envelope._src.teststand.engines.reference import simulate, step
 
@@ -396,3 +397,27 @@ def test_every_step_from_rest_stays_inside_the_envelope(
     assert np.all(envelope.contains(trajectory.velocity, trajectory.effort, atol=1e-9 * scale))
     assert np.all(np.isfinite(trajectory.effort))
     assert not math.isnan(float(trajectory.position[-1]))
+
+
+def test_an_overflow_names_the_step_it_happened_in() -> None:
+    """One InputError line naming the first step (PGS) whose state overflows float64."""
+    free = {"stiffness": 1.0, "max_effort": 0.0}  # the drive off: the load alone moves the joint
+    # v grows by 1e305 / 2e-3 * 0.005 = 2.5e305 a step, q after n steps by n*(n+1)/2 * 0.005 * 2.5e305:
+    # beyond float64's 1.798e308 after 536 steps, so in the step from t = 535 * 0.005 s
+    late = make(inertia=2e-3, drive=free, load={"external_effort": 1e305}, dt=0.005, duration=5.0)
+    message = r"joint state \(position, velocity, effort\) overflowed float64 in the step from t = 2\.675 s"
+    with pytest.raises(InputError, match=message):
+        simulate(late)
+
+
+@pytest.mark.parametrize("solver", ["pgs", "tgs"])
+def test_an_overflowing_drive_law_or_request_is_refused(solver: str) -> None:
+    """The law of a drive that is off, and an infinite request whose clamp would be finite."""
+    law = make(solver=solver, drive={"damping": 1e308, "target_velocity": 5.0, "max_effort": 0.0})
+    with pytest.raises(InputError, match=r"implicit drive law .* from t = 0 s"):
+        step(law, 0.0, 0.0)  # dt * damping * target_velocity is inf
+    request = make(solver=solver, inertia=1e-10, load={"external_effort": 1e308})
+    with pytest.raises(
+        InputError, match=r"the drive's impulse request overflowed float64 in the step from t = 0 s"
+    ):
+        simulate(request)

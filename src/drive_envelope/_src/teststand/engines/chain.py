@@ -44,15 +44,11 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 from drive_envelope._src.teststand.engines.chain_dynamics import ChainModel
-from drive_envelope._src.teststand.engines.solver_terms import (
-    ImplicitDriveDesc,
-    compute_drive_impulse,
-    compute_friction_impulse,
-    implicit_drive_desc,
-)
+from drive_envelope._src.teststand.solver_terms import DriveLaw, drive_law, drive_request, friction_impulse
 
 FloatArray = npt.NDArray[np.float64]
 _PROGRESS_EVERY = 1024
+_CHECK = "the masses, inertias, drive gains and loads"
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -72,7 +68,7 @@ class _Dof:
 class _Step:
     """One step's start-of-step quantities and accumulated impulses."""
 
-    def __init__(self, minv: FloatArray, descs: list[ImplicitDriveDesc]) -> None:
+    def __init__(self, minv: FloatArray, descs: list[DriveLaw]) -> None:
         self.minv = minv
         self.response = np.diag(minv).copy()
         self.descs = descs
@@ -141,8 +137,8 @@ def _sweep(
             if reclamp:
                 request = applied0  # TGS velocity iterations re-clamp what the substeps applied
             else:
-                shift = 0.0 if delta_position is None else float(delta_position[i])
-                request = compute_drive_impulse(state.descs[i], applied0, float(velocity[i]), shift, elapsed)
+                shift = None if delta_position is None else float(delta_position[i])
+                request = drive_request(state.descs[i], applied0, float(velocity[i]), shift, elapsed)
                 if not math.isfinite(request):
                     raise ArithmeticError("the drive's impulse request")
             delta = _clamp(dof, float(velocity[i]), applied0, request, r, timestep) - applied0
@@ -151,12 +147,14 @@ def _sweep(
                 state.impulse[i] += delta
         if dof.friction:
             accumulated = 0.0 if per_step else float(state.friction[i])
-            total = compute_friction_impulse(
-                accumulated - float(velocity[i]) / r,
-                dof.static * timestep,
-                dof.dynamic * timestep,
-                dof.viscous * timestep,
-                float(velocity[i]),
+            total = float(
+                friction_impulse(
+                    accumulated - float(velocity[i]) / r,
+                    dof.static * timestep,
+                    dof.dynamic * timestep,
+                    dof.viscous * timestep,
+                    float(velocity[i]),
+                )
             )
             delta = total - accumulated
             if delta != 0.0:
@@ -166,22 +164,24 @@ def _sweep(
 
 def _descs(
     scenario: ChainScenario, response: FloatArray, position: FloatArray, dt: float, is_tgs: bool
-) -> list[ImplicitDriveDesc]:
+) -> list[DriveLaw]:
     sim_dt = scenario.simulation.dt
     result = []
     for i, joint in enumerate(scenario.joints):
         drive = joint.drive
+        r = float(response[i])
         result.append(
-            implicit_drive_desc(
+            drive_law(
                 drive_type=drive.type,
+                is_tgs=is_tgs,
                 stiffness=drive.stiffness,
                 damping=drive.damping,
-                dt=dt,
-                sim_dt=sim_dt,
-                response=float(response[i]),
+                response=r,
+                inertia=1.0 / r,  # PhysX's recipResponse
                 geom_error=drive.target_position - float(position[i]),
                 target_velocity=drive.target_velocity,
-                is_tgs=is_tgs,
+                dt=dt,
+                sim_dt=sim_dt,
             )
         )
     return result
@@ -261,9 +261,12 @@ def simulate_chain(
             try:
                 q, v, e = step_chain(scenario, model, position[i], velocity[i], dofs)
             except (ArithmeticError, np.linalg.LinAlgError) as exc:
-                raise _overflow(scenario, str(exc) or "a drive quantity", i * sim.dt) from None
+                raise overflow_error(
+                    scenario.name, str(exc) or "a drive quantity", i * sim.dt, _CHECK
+                ) from None
             if not (np.isfinite(q).all() and np.isfinite(v).all() and np.isfinite(e).all()):
-                raise _overflow(scenario, "the joint state (position, velocity, effort)", i * sim.dt)
+                what = "the joint state (position, velocity, effort)"
+                raise overflow_error(scenario.name, what, i * sim.dt, _CHECK)
             position[i + 1], velocity[i + 1], effort[i + 1] = q, v, e
             if progress is not None and (i + 1) % _PROGRESS_EVERY == 0:
                 progress(i + 1, count)
@@ -289,8 +292,9 @@ def simulate_chain(
     )
 
 
-def _overflow(scenario: ChainScenario, what: str, time: float) -> InputError:
+def overflow_error(name: str | None, what: str, time: float, check: str) -> InputError:
+    """The one line of a reference run (a joint's or a chain's) that overflowed float64 at ``time`` [s]."""
     return InputError(
-        f"scenario {scenario.name or ''!r}: {what} overflowed float64 in the step from t = {time:g} s; "
-        "expected values whose products stay finite (check the masses, inertias, drive gains and loads)"
+        f"scenario {name or ''!r}: {what} overflowed float64 in the step from t = {time:g} s; "
+        f"expected values whose products stay finite (check {check})"
     )
