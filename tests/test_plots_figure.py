@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -239,3 +240,23 @@ def test_plot_draws_a_bench_log_without_position(
     bare = write_log(tmp_path / "bare.csv", "velocity,effort\n0,1\n5,11\n")
     argv = ["plot", str(bench_envelope_file), "-t", str(bare), "-o", str(tmp_path / "bare.png")]
     assert run_cli(argv, capsys)[0] == 0
+    argv = ["plot", str(bench_envelope_file), "-t", str(log), "-o", str(tmp_path / "b.png"), "--json"]
+    code, out, _ = run_cli(argv, capsys)
+    assert code == 0 and json.loads(out)["trajectories"][0]["label"] == "bench"  # the file's name
+
+
+def test_plot_reads_a_log_as_check_reads_it(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Units and case in the header (issue 29: plot -t refused `Velocity [rpm]`, which check reads)."""
+    pytest.importorskip("matplotlib")
+    log = write_log(tmp_path / "rpm.csv", "Time,Velocity [rpm],Effort [mNm]\n0,0,1000\n0.1,60,11000\n")
+    assert run_cli(["check", str(bench_envelope_file), str(log)], capsys)[0] in (0, 1)
+    argv = ["plot", str(bench_envelope_file), "-t", str(log), "-o", str(tmp_path / "rpm.png"), "--json"]
+    code, out, _ = run_cli(argv, capsys)
+    assert code == 0 and json.loads(out)["trajectories"] == [{"file": str(log), "label": "rpm", "samples": 2}]
+    bad = write_log(tmp_path / "bad.csv", "time,velocity,velocity,effort\n0,1,1,1\n")
+    code, _, err = run_cli(
+        ["plot", str(bench_envelope_file), "-t", str(bad), "-o", str(tmp_path / "x.png")], capsys
+    )
+    assert code == 2 and "column 'velocity' is ambiguous" in err

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from drive_envelope import InputError
+from drive_envelope._src.analysis.logs import read_log
 from drive_envelope._src.scenario.trajectory import (
     Trajectory,
     read_operating_log,
@@ -214,18 +215,22 @@ def _write_log(path: Path, text: str) -> Path:
 
 
 def test_operating_log_reader_keeps_the_trajectory_reader_strict(tmp_path: Path) -> None:
-    """The plot's reader needs velocity and effort only; `read_trajectory` still needs position."""
+    """plot -t reads a CSV log with check's reader (velocity, effort); read_trajectory needs position."""
     log = _write_log(tmp_path / "bench.csv", "time,velocity,effort\n0,0,1\n0.1,5,11\n")
-    points = read_operating_log(log)
+    points = read_log(log)  # what plot -t reads a CSV log with (issue 29: one log reader)
     assert points.velocity.tolist() == [0.0, 5.0] and points.effort.tolist() == [1.0, 11.0]
-    assert points.time is not None and points.time.tolist() == [0.0, 0.1] and points.name == "bench"
-    assert read_operating_log(_write_log(tmp_path / "bare.csv", "velocity,effort\n1,2\n")).time is None
+    assert points.time is not None and points.time.tolist() == [0.0, 0.1]
+    assert read_log(_write_log(tmp_path / "bare.csv", "velocity,effort\n1,2\n")).time is None
     with pytest.raises(
         InputError, match="missing column\\(s\\) position; expected header time,position,velocity,effort"
     ):
         read_trajectory(log)
-    with pytest.raises(InputError, match="missing column\\(s\\) effort"):
-        read_operating_log(_write_log(tmp_path / "no_effort.csv", "time,velocity\n0,1\n"))
+    with pytest.raises(InputError, match="no column 'effort'"):
+        read_log(_write_log(tmp_path / "no_effort.csv", "time,velocity\n0,1\n"))
+    with pytest.raises(
+        InputError, match="expected a JSON or Parquet trajectory; CSV logs go through read_log"
+    ):
+        read_operating_log(log)
     data = {"engine": "bench", "name": "swing", "velocity": [1.0, 2.0], "effort": [3.0, 4.0]}
     json_log = _write_log(tmp_path / "bench.json", json.dumps(data))
     assert read_operating_log(json_log).name == "swing" and read_operating_log(json_log).time is None

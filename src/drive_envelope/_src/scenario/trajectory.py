@@ -239,7 +239,7 @@ def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolut
     text = read_text(file)
     if suffix == ".json":
         return _from_json(text, file)
-    arrays = _csv_columns(text, file, COLUMNS, ())
+    arrays = _csv_columns(text, file, COLUMNS)
     return Trajectory(
         time=arrays["time"],
         position=arrays["position"],
@@ -271,15 +271,16 @@ _POINTS_OPTIONAL = ("time",)
 
 
 def read_operating_log(path: str | os.PathLike[str]) -> OperatingLog:
-    """Read the ``velocity`` and ``effort`` (and, when present, ``time``) columns of a trajectory file.
+    """Read the ``velocity`` and ``effort`` (and, when present, ``time``) of a JSON or Parquet trajectory.
 
     The formats are those of :func:`read_trajectory`, which needs every column; here ``position``
-    is not read and ``time`` may be absent, so a bench log ``time,velocity,effort`` (or
-    ``velocity,effort``) reads too. Numbers are SI, as in a trajectory (no units in headers).
+    is not read and ``time`` may be absent, and the run's ``engine`` and ``name`` come with the
+    numbers (SI). A CSV log is read by the one log reader (``analysis.logs.read_log``), as
+    ``check`` and ``plot -t`` read it.
 
     Raises:
-        InputError: missing file, a missing or repeated velocity/effort/time column, columns of
-            different lengths (JSON), or a cell that is not a finite number.
+        InputError: missing file, a CSV file, a missing or repeated velocity/effort/time column,
+            columns of different lengths (JSON), or a value that is not a finite number.
     """
     file = Path(path)
     suffix = file.suffix.lower()
@@ -289,13 +290,11 @@ def read_operating_log(path: str | os.PathLike[str]) -> OperatingLog:
         arrays, header = read_parquet(file, _POINTS, optional=_POINTS_OPTIONAL)
         engine, name = header.get("engine", ""), header.get("name", "")
     else:
-        text = read_text(file)
-        if suffix == ".json":
-            data = _json_object(text, file)
-            arrays = _json_columns(data, file, _POINTS, _POINTS_OPTIONAL)
-            engine, name = data.get("engine", ""), data.get("name", "")
-        else:
-            arrays, engine, name = _csv_columns(text, file, _POINTS, _POINTS_OPTIONAL), "", ""
+        if suffix != ".json":
+            raise InputError(f"{file}: expected a JSON or Parquet trajectory; CSV logs go through read_log")
+        data = _json_object(read_text(file), file)
+        arrays = _json_columns(data, file, _POINTS, _POINTS_OPTIONAL)
+        engine, name = data.get("engine", ""), data.get("name", "")
     return OperatingLog(
         velocity=arrays["velocity"],
         effort=arrays["effort"],
@@ -317,25 +316,15 @@ def _cell(value: str | None, where: str) -> float:
     return number
 
 
-def _expected(required: tuple[str, ...], optional: tuple[str, ...]) -> str:
-    """``header time,position,velocity,effort``, or the columns needed and those that may be absent."""
-    if not optional:
-        return f"header {','.join(required)}"
-    return f"columns {','.join(required)} ({', '.join(optional)} optional)"
-
-
-def _csv_columns(
-    text: str, file: Path, required: tuple[str, ...], optional: tuple[str, ...]
-) -> dict[str, FloatArray]:
-    """The ``required`` columns of a CSV trajectory and those of ``optional`` that it has."""
+def _csv_columns(text: str, file: Path, required: tuple[str, ...]) -> dict[str, FloatArray]:
+    """The ``required`` columns of a CSV trajectory (the file format of simulate: SI, exact names)."""
     reader = csv.reader(io.StringIO(text))
     try:
         header = [name.strip() for name in next(reader, [])]
         rows = list(reader)
     except csv.Error as exc:  # a field over the csv module's limit
         raise InputError(f"{file}: cannot read as CSV: {exc}") from None
-    wanted = required + optional
-    repeated = sorted({name for name in header if name in wanted and header.count(name) > 1})
+    repeated = sorted({name for name in header if name in required and header.count(name) > 1})
     if repeated:
         raise InputError(f"{file}: column {repeated[0]!r} appears {header.count(repeated[0])} times")
     missing = [c for c in required if c not in header]
@@ -347,9 +336,9 @@ def _csv_columns(
             else ""
         )
         raise InputError(
-            f"{file}: missing column(s) {', '.join(missing)}; expected {_expected(required, optional)}{hint}"
+            f"{file}: missing column(s) {', '.join(missing)}; expected header {','.join(required)}{hint}"
         )
-    index = {column: header.index(column) for column in wanted if column in header}
+    index = {column: header.index(column) for column in required}
     columns: dict[str, list[float]] = {c: [] for c in index}
     for line, row in enumerate(rows, start=2):
         if not row:

@@ -36,7 +36,8 @@ def register(subparsers: Any) -> None:
         default=[],
         metavar="FILE",
         help="a trajectory written by `drive-envelope simulate` (CSV, JSON or Parquet) or a bench log "
-        "with velocity and effort columns (time optional, SI numbers); repeat for several",
+        "with velocity and effort columns (time optional; units in headers as check reads them); repeat "
+        "for several",
     )
     add_output_argument(parser, "figure file: .png, .svg or .pdf", required=True, metavar="FIG")
     parser.add_argument(
@@ -58,28 +59,15 @@ def _run(args: argparse.Namespace) -> int:
     import warnings
 
     from drive_envelope._src.cli.common import checked_output, status, warn
-    from drive_envelope._src.plots.curve import OperatingPoints
-    from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
+    from drive_envelope._src.plots.figure import check_figure_path, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
-    from drive_envelope._src.scenario.trajectory import read_operating_log
 
     output = checked_output(args.output)
     assert output is not None  # required
     check_figure_path(output)
     envelope = envelope_from_argument(args.envelope)
     _check_plottable(envelope, args.envelope)
-    points = []
-    for path in args.trajectory:
-        trajectory = read_operating_log(path)  # velocity and effort; position is not drawn
-        label = f"{trajectory.name} ({trajectory.engine})" if trajectory.engine else trajectory.name
-        points.append(
-            OperatingPoints(
-                velocity=trajectory.velocity,
-                effort=trajectory.effort,
-                time=trajectory.time,
-                label=plain_text(label),  # a name from a file is text, never mathtext
-            )
-        )
+    points = [_points(path) for path in args.trajectory]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         handle = plot_envelope(envelope, points=points or None, title=_title(args.title))
@@ -105,6 +93,32 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     status(f"wrote {output}")
     return 0
+
+
+def _points(path: str) -> Any:
+    """The operating points of ``path``: velocity, effort and time; position is not drawn.
+
+    simulate's JSON and Parquet files carry the run's name and engine, which label the points; any
+    other log is read by check's reader (its columns, units in headers, cell rules).
+    """
+    from pathlib import Path
+
+    from drive_envelope._src.plots.curve import OperatingPoints
+    from drive_envelope._src.plots.figure import plain_text
+
+    if Path(path).suffix.lower() in (".json", ".parquet", ".pq"):
+        from drive_envelope._src.scenario.trajectory import read_operating_log
+
+        run = read_operating_log(path)
+        label = f"{run.name} ({run.engine})" if run.engine else run.name
+        velocity, effort, time = run.velocity, run.effort, run.time
+    else:
+        from drive_envelope._src.analysis.logs import read_log
+
+        log = read_log(path)
+        label, velocity, effort, time = Path(path).stem, log.velocity, log.effort, log.time
+    # a name from a file is text, never mathtext
+    return OperatingPoints(velocity=velocity, effort=effort, time=time, label=plain_text(label))
 
 
 def _title(title: str | None) -> str | None:
