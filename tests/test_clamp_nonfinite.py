@@ -6,7 +6,9 @@ infinite velocity the limit at infinite speed: 0 when ``R > 0`` or ``v_max`` is 
 the host is refused by all three backends (a Warp array or torch tensor is not read: that would
 sync with the device), and so is a time step that is not finite and > 0.
 
-Each backend's tests skip cleanly where its package is missing (``pytest.importorskip``).
+A backend is a test parameter with its engine marker (tests/_backends.py), or its test skips with
+``pytest.importorskip``: each skips cleanly where its package is missing. A bad time step in every
+backend: tests/test_kernels_backends.py.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 import pytest
 
 import drive_envelope as de
+from _backends import EVERY, Backend
 from drive_envelope.errors import InputError
 
 F32_MAX = float(np.finfo(np.float32).max)
@@ -152,15 +155,26 @@ def test_numpy_reported_cases() -> None:
         assert float(env.effort_limit(math.nan)) == 0.0
 
 
-def test_warp_follows_the_rule() -> None:
-    """Give the rule's numbers from Warp's launches (float32) for effort_limit and clamp_effort."""
-    dw = _warp()
-    envs, effort, velocity, clamped, limit = _expected_grid(float32=True)
-    params = dw.EnvelopeArrays.from_envelopes(envs, device="cpu")
-    got = dw.clamp_effort(params, effort, velocity).numpy()
-    got_limit = dw.effort_limit(params, velocity).numpy()
-    assert _close(got, clamped, 1e-6)
-    assert _close(got_limit, limit, 1e-6)
+@pytest.mark.parametrize(
+    ("name", "dtype"),
+    [
+        pytest.param("warp", "float32", marks=pytest.mark.warp, id="warp-float32"),
+        pytest.param("torch", "float32", marks=pytest.mark.torch, id="torch-float32"),
+        pytest.param("torch", "float64", marks=pytest.mark.torch, id="torch-float64"),
+    ],
+)
+def test_ports_follow_the_rule(name: str, dtype: str) -> None:
+    """Give the rule's numbers from Warp's launches and torch's ops for effort_limit and clamp_effort."""
+    port = Backend(name=name)
+    envs, effort, velocity, clamped, limit = _expected_grid(float32=dtype == "float32")
+    rtol = 1e-6 if dtype == "float32" else 1e-15
+    params = port.params(envs, dtype=dtype)
+    # torch gets tensors of its dtype, Warp host arrays its launch wrappers upload
+    e, v = (
+        (effort, velocity) if name == "warp" else port.upload([effort.astype(dtype), velocity.astype(dtype)])
+    )
+    assert _close(port.host(port.module.clamp_effort(params, e, v)), clamped, rtol)
+    assert _close(port.host(port.module.effort_limit(params, v)), limit, rtol)
 
 
 def test_warp_funcs_follow_the_rule_in_float64() -> None:
@@ -193,8 +207,8 @@ def test_warp_funcs_follow_the_rule_in_float64() -> None:
 
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
-def test_torch_follows_the_rule(dtype: str) -> None:
-    """Give the rule's numbers from torch, with and without autograd recording, both CPU code paths."""
+def test_torch_follows_the_rule_while_recording_and_in_its_buffers(dtype: str) -> None:
+    """Give the rule's numbers with and without autograd recording, both CPU code paths."""
     dt = _torch()
     import torch
 
@@ -206,7 +220,7 @@ def test_torch_follows_the_rule(dtype: str) -> None:
     params = dt.EnvelopeTensors.from_envelopes(envs, dtype=kind)
     e, v = torch.tensor(effort, dtype=kind), torch.tensor(velocity, dtype=kind)
     result, result_limit = dt.clamp_effort(params, e, v), dt.effort_limit(params, v)
-    assert _close(result, clamped, rtol)
+    assert _close(result, clamped, rtol)  # the plain path: test_ports_follow_the_rule
     assert _close(result_limit, limit, rtol)
     tracked = e.clone().requires_grad_(True)
     assert _same(dt.clamp_effort(params, tracked, v).detach(), result)
@@ -261,26 +275,23 @@ ENV = de.PerformanceEnvelope(
 )
 
 
-def test_negative_response_is_refused_on_the_host_in_every_backend() -> None:
+@pytest.fixture(params=[p for p in EVERY if "cuda" not in str(p.id)])
+def every(request: pytest.FixtureRequest) -> Backend:
+    """The NumPy reference and the ports on the CPU (this file's checks are on the host)."""
+    name, device = request.param
+    return Backend(name=name, device=device)
+
+
+def test_negative_response_is_refused_on_the_host_in_every_backend(every: Backend) -> None:
     """Refuse a negative response given as a number or NumPy array in NumPy, Warp and torch alike."""
-    with pytest.raises(InputError) as error:
-        de.clamp_effort_implicit(ENV, 1.0, 0.0, -1.0, 0.01)
-    _one_line(error, "response", ">= 0", "-1.0")
-    with pytest.raises(InputError, match="response"):
-        de.clamp_effort_implicit(ENV, [1.0, 1.0], 0.0, np.array([2.0, -0.5]), 0.01)
-    for backend in ("warp", "torch"):
-        try:
-            module = _warp() if backend == "warp" else _torch()
-        except pytest.skip.Exception:
-            continue
-        if backend == "warp":
-            params = module.EnvelopeArrays.from_envelopes(ENV, count=2, device="cpu")
-        else:
-            params = module.EnvelopeTensors.from_envelopes(ENV, count=2)
-        for response in (-1.0, np.array([2.0, -0.5])):
-            with pytest.raises(InputError) as error:
-                module.clamp_effort_implicit(params, 1.0, 0.0, response, 0.01)
-            _one_line(error, "response", ">= 0")
+    params = every.params(ENV, count=2)
+    for request, response, shown in [
+        (1.0, -1.0, "-1.0"),
+        (np.array([1.0, 1.0], dtype=np.float32), np.array([2.0, -0.5]), "-0.5"),
+    ]:
+        with pytest.raises(InputError) as error:
+            every.ops().clamp_effort_implicit(params, request, 0.0, response, 0.01)
+        _one_line(error, "response", ">= 0", shown)
 
 
 def test_device_response_is_not_read_and_gives_the_guarded_result() -> None:
@@ -317,11 +328,3 @@ def test_device_response_is_not_read_and_gives_the_guarded_result() -> None:
     assert float(de.clamp_effort_implicit(ENV, 3.0, 1.0, math.nan, 0.01)) == 0.0
     if len(results) == 2:
         np.testing.assert_allclose(results[0], results[1], rtol=1e-5, atol=1e-4)
-
-
-@pytest.mark.parametrize("dt_value", [0.0, -0.01, math.inf, math.nan, True])
-def test_numpy_implicit_refuses_a_bad_time_step_like_warp_and_torch(dt_value: float) -> None:
-    """Refuse a time step that is not finite and > 0 with InputError in NumPy too."""
-    with pytest.raises(InputError) as error:
-        de.clamp_effort_implicit(ENV, 1.0, 0.0, 1.0, dt_value)
-    _one_line(error, "dt:", "> 0 and finite")

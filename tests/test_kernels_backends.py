@@ -18,9 +18,8 @@ What only one backend has stays in its file: torch's dtypes, autograd and float6
 
 from __future__ import annotations
 
-import dataclasses
-import importlib
 import inspect
+import math
 import subprocess
 import sys
 from typing import Any
@@ -29,102 +28,12 @@ import numpy as np
 import pytest
 
 import drive_envelope as de
+from _backends import DEVICES, EVERY, PORTS, Backend
 from _kernel_vectors import IMPULSE_ARGS, edge_impulse_args, envelope_cases, physx_golden, random_impulse_args
 from drive_envelope.errors import InputError
 
 RTOL = 1e-5
 ATOL_SCALE = 1e-5
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class Backend:
-    """One backend on one device: its module and how its arrays go up and come back."""
-
-    name: str
-    """``"numpy"``, ``"torch"`` or ``"warp"``."""
-    device: str = "cpu"
-
-    @property
-    def module(self) -> Any:
-        if self.name == "warp":
-            import warp as wp
-
-            wp.config.quiet = True
-        return importlib.import_module(f"drive_envelope.{self.name}")
-
-    @property
-    def dtypes(self) -> tuple[str, ...]:
-        """The float dtypes its effort-level ops compute in (Warp: float32 only, like PhysX)."""
-        return ("float32",) if self.name == "warp" else ("float32", "float64")
-
-    def upload(self, arrays: list[np.ndarray]) -> list[Any]:
-        """The arrays on the backend's device, in its own array type (float32 for Warp)."""
-        if self.name == "torch":
-            import torch
-
-            return [torch.from_numpy(a).to(self.device) for a in arrays]
-        if self.name == "warp":
-            import warp as wp
-
-            return [wp.array(a, dtype=wp.float32, device=self.device) for a in arrays]
-        return list(arrays)
-
-    def params(self, envelopes: Any, count: int | None = None, dtype: str = "float32") -> Any:
-        """The backend's parameter object (for NumPy: the envelope itself)."""
-        if self.name == "numpy":
-            return envelopes
-        if self.name == "torch":
-            kind = getattr(np, dtype)
-            return self.module.EnvelopeTensors.from_envelopes(
-                envelopes, count=count, device=self.device, dtype=kind
-            )
-        assert dtype == "float32"
-        return self.module.EnvelopeArrays.from_envelopes(envelopes, count=count, device=self.device)
-
-    def values(self, **kwargs: Any) -> Any:
-        """The parameter object from ``from_values`` on the device."""
-        kind = self.module.EnvelopeTensors if self.name == "torch" else self.module.EnvelopeArrays
-        return kind.from_values(device=self.device, **kwargs)
-
-    def ops(self) -> Any:
-        """``effort_limit``, ``clamp_effort``, ``clamp_effort_implicit`` with the parameters first."""
-        if self.name != "numpy":
-            return self.module
-        return _NumpyOps
-
-    def host(self, result: Any) -> np.ndarray:
-        """A result read back into a NumPy array."""
-        if self.name == "torch":
-            return np.asarray(result.detach().cpu().numpy())
-        if self.name == "warp":
-            import warp as wp
-
-            return np.asarray(result.numpy() if isinstance(result, wp.array) else result)
-        return np.asarray(result)
-
-
-class _NumpyOps:
-    """The reference under the ports' names: ``params`` is a :class:`PerformanceEnvelope`."""
-
-    @staticmethod
-    def effort_limit(envelope: de.PerformanceEnvelope, velocity: Any) -> Any:
-        return envelope.effort_limit(velocity)
-
-    clamp_effort = staticmethod(de.clamp_effort)
-    clamp_effort_implicit = staticmethod(de.clamp_effort_implicit)
-
-
-PORTS = [pytest.param("torch", marks=pytest.mark.torch), pytest.param("warp", marks=pytest.mark.warp)]
-"""The ports, device-independent tests (host inputs)."""
-DEVICES = [
-    pytest.param(("torch", "cpu"), marks=pytest.mark.torch, id="torch-cpu"),
-    pytest.param(("torch", "cuda"), marks=[pytest.mark.torch, pytest.mark.gpu], id="torch-cuda"),
-    pytest.param(("warp", "cpu"), marks=pytest.mark.warp, id="warp-cpu"),
-    pytest.param(("warp", "cuda:0"), marks=[pytest.mark.warp, pytest.mark.gpu], id="warp-cuda"),
-]
-"""The ports on each device."""
-EVERY = [pytest.param(("numpy", "cpu"), id="numpy"), *DEVICES]
-"""The reference and the ports on each device."""
 
 
 @pytest.fixture(params=PORTS)
@@ -331,9 +240,9 @@ def test_zero_dofs_give_empty_results(every: Backend) -> None:
 # -- what is refused --------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("dt_value", [-0.01, 0.0])
+@pytest.mark.parametrize("dt_value", [0.0, -0.01, math.inf, math.nan, True])
 def test_a_bad_time_step_is_refused(every: Backend, dt_value: float) -> None:
-    """Refuse a time step that is not > 0 with one InputError line naming dt."""
+    """Refuse a time step that is not finite and > 0 (or a bool) with one InputError line naming dt."""
     ops = every.ops()
     params = every.params(de.PerformanceEnvelope(max_effort=1.0), count=4)
     with pytest.raises(InputError, match="dt") as error:
