@@ -290,3 +290,10 @@ def test_shapes_that_do_not_broadcast_are_named(backend: Backend) -> None:
         _one_line(error, name, "(5,)", "(3,)")
         if backend.name == "torch":  # torch broadcasts states and names the op; Warp wants (N,) arrays
             _one_line(error, where, "broadcast")
+
+
+def test_impulse_shapes_that_do_not_broadcast_are_named(port: Backend) -> None:
+    """Refuse impulse arguments whose shapes do not broadcast, naming each (torch: was a RuntimeError)."""
+    with pytest.raises(InputError) as error:
+        port.module.clamp_drive_impulse(np.zeros(3), np.zeros(4), 1.0, 1.0, 1.0, 1.0, 0.0, 0.0)
+    _one_line(error, "clamp_drive_impulse: shapes do not broadcast", "joint_vel0=(3,)", "drive_impulse0=(4,)")

@@ -25,7 +25,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from drive_envelope._src.envelope.clamp import PX_EPS_F32, PX_MAX_F32, check_time_step
+from drive_envelope._src.envelope.clamp import (
+    CLAMP_DRIVE_IMPULSE_ARGS,
+    PX_EPS_F32,
+    PX_MAX_F32,
+    check_time_step,
+)
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
@@ -207,10 +212,17 @@ def _clamp_drive_impulse_tensors(
     return torch.where(lower <= upper, upper * sign, 0.0)
 
 
-def _impulse_tensors(values: tuple[object, ...], dtype: Any) -> list[torch.Tensor]:
+def _impulse_tensors(values: tuple[object, ...], dtype: Any, where: str) -> list[torch.Tensor]:
     import torch
 
-    return list(torch.broadcast_tensors(*_tensors(values, dtype)))
+    tensors = _tensors(values, dtype)
+    shapes = [tuple(t.shape) for t in tensors]
+    try:  # a user mistake, named as Warp names it (torch's own error is a RuntimeError)
+        np.broadcast_shapes(*shapes)
+    except ValueError:
+        listed = ", ".join(f"{n}={s}" for n, s in zip(CLAMP_DRIVE_IMPULSE_ARGS, shapes, strict=True))
+        raise InputError(f"{where}: shapes do not broadcast ({listed})") from None
+    return list(torch.broadcast_tensors(*tensors))
 
 
 def clamp_drive_impulse(
@@ -257,7 +269,7 @@ def clamp_drive_impulse(
         speed_impulse_gradient,
         velocity_dependent_resistance,
     )
-    v0, x0, x, r, max_v, max_x, grad, resist = _impulse_tensors(values, dtype)
+    v0, x0, x, r, max_v, max_x, grad, resist = _impulse_tensors(values, dtype, "clamp_drive_impulse")
     return _clamp_drive_impulse_tensors(v0, x0, x, r, max_v, max_x, grad, resist, exact=bool(physx_exact))
 
 
@@ -314,7 +326,7 @@ def fused_clamp_drive_impulse(
         speed_impulse_gradient,
         velocity_dependent_resistance,
     )
-    tensors = [t.contiguous() for t in _impulse_tensors(values, dtype)]
+    tensors = [t.contiguous() for t in _impulse_tensors(values, dtype, "fused_clamp_drive_impulse")]
     return _compiled_port()(*tensors, exact=bool(physx_exact))
 
 
