@@ -101,23 +101,28 @@ def available(engine: str) -> bool:
 
 @contextmanager
 def _clamp(backend: str) -> Iterator[None]:
-    """The reference engine with its clamp replaced by the Warp or torch port (float32)."""
-    from drive_envelope._src.teststand.engines import reference
+    """The reference engine with its clamp replaced by the Warp or torch port (float32).
+
+    The reference is a batch of one (``teststand/batch.py``): the clamp gets the batch's float64
+    arrays and gives back float64 arrays of their broadcast shape.
+    """
+    from drive_envelope._src.teststand import batch
 
     if backend == "warp":
         from drive_envelope.warp import clamp_drive_impulse as port
 
-        def clamp(*args: float) -> float:
-            return float(np.asarray(port(*args))[0])
+        def clamp(*args: Any) -> np.ndarray:
+            return np.asarray(port(*args), dtype=np.float64)
     else:
         import torch
 
         from drive_envelope.torch import clamp_drive_impulse as port
 
-        def clamp(*args: float) -> float:
-            return float(port(*(torch.tensor(float(a), dtype=torch.float32) for a in args)))
+        def clamp(*args: Any) -> np.ndarray:
+            tensors = (torch.as_tensor(np.asarray(a, dtype=np.float32)) for a in args)
+            return port(*tensors).numpy().astype(np.float64)
 
-    with mock.patch.object(reference, "clamp_drive_impulse", clamp):
+    with mock.patch.object(batch, "clamp_drive_impulse", clamp):
         yield
 
 
