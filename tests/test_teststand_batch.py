@@ -242,6 +242,9 @@ def test_progress_every_4096_steps_and_a_batch_that_all_diverged_stops() -> None
     _run(_stand([good]), 9000, progress=lambda done, total: calls.append((done, total)))
     assert calls == [(4096, 9000), (8192, 9000), (9000, 9000)]
     calls.clear()
+    empty = _run(_stand([good]), 0, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(0, 0)] and empty.position.tolist() == [[0.1]] and empty.diverged_step.tolist() == [-1]
+    calls.clear()
     broken = dataclasses.replace(
         _stand([good]), max_effort=np.array([0.0]), external_effort=np.array([1e306])
     )

@@ -495,7 +495,7 @@ def simulate_batch(
     dead = np.zeros(size, dtype=np.bool_)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # overflows are reported
         c, budgets = _constants(stand), _budgets(solver, stand)
-        while done < steps:
+        while True:  # at least once: a run of 0 steps reports (0, 0)
             chunk = range(done, min(done + PROGRESS_EVERY, steps))
             for i in chunk:
                 command = (q_target[i], v_target[i], powered[i])
@@ -507,13 +507,15 @@ def simulate_batch(
                 break  # every element has diverged: the rest would be NaN
             if progress is not None:
                 progress(done, steps)
+            if done == steps:
+                break
     bad = _bad_steps(position, velocity, effort, bad_law, bad_request, range(done))
     diverged: BoolArray = np.asarray(bad.any(axis=0), dtype=np.bool_)
-    first = np.where(diverged, np.argmax(bad, axis=0), -1).astype(np.int64)
+    first = np.full(size, -1, dtype=np.int64)
     code = np.zeros(size, dtype=np.int64)
     if diverged.any():
         index = np.flatnonzero(diverged)
-        rows = first[index]
+        rows = first[index] = np.argmax(bad[:, index], axis=0)
         code[index] = _overflow(
             bad_law[rows, index], bad_request[rows, index], np.ones(index.size, dtype=np.bool_)
         )
