@@ -292,6 +292,22 @@ def test_shapes_that_do_not_broadcast_are_named(backend: Backend) -> None:
             _one_line(error, where, "broadcast")
 
 
+def test_numpy_shapes_that_do_not_broadcast_are_named() -> None:
+    """The reference names a shape mismatch as the ports do (it raised NumPy's bare ValueError)."""
+    env = de.PerformanceEnvelope(max_effort=12.0, max_actuator_velocity=10.0)
+    five, three = np.zeros(5), np.zeros(3)
+    implicit = "clamp_effort_implicit"
+    for call, where, named in [
+        (lambda: de.clamp_effort(env, three, five), "clamp_effort", ("effort=(3,)", "velocity=(5,)")),
+        (lambda: de.clamp_effort_implicit(env, five, five, three, 0.01), implicit, ("response=(3,)",)),
+        (lambda: de.clamp_drive_impulse(three, five, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0), "clamp_drive_impulse",
+         ("joint_vel0=(3,)", "drive_impulse0=(5,)")),
+    ]:  # fmt: skip
+        with pytest.raises(InputError) as error:
+            call()
+        _one_line(error, f"{where}: shapes do not broadcast", *named)
+
+
 def test_impulse_shapes_that_do_not_broadcast_are_named(port: Backend) -> None:
     """Refuse impulse arguments whose shapes do not broadcast, naming each (torch: was a RuntimeError)."""
     with pytest.raises(InputError) as error:

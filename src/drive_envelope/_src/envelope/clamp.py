@@ -67,6 +67,7 @@ N = 1e6, thread CPU time, 2-core EPYC, 2026-12-03).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -94,6 +95,19 @@ CLAMP_DRIVE_IMPULSE_ARGS = (
 Array = npt.NDArray[Any]
 
 
+def broadcast_shape(where: str, names: Sequence[str], shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:
+    """The broadcast shape of the arguments, or one InputError naming each argument's shape.
+
+    Every backend's rule (NumPy, torch and Warp name a mismatch the same way): shapes that do not
+    broadcast are a user mistake, not NumPy's ``ValueError`` or torch's ``RuntimeError``.
+    """
+    try:
+        return tuple(np.broadcast_shapes(*shapes))
+    except ValueError:
+        listed = ", ".join(f"{n}={tuple(s)}" for n, s in zip(names, shapes, strict=True))
+        raise InputError(f"{where}: shapes do not broadcast ({listed})") from None
+
+
 def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity: npt.ArrayLike) -> Array:
     """Limit ``effort`` to the envelope at the given (current) velocity: the explicit clamp.
 
@@ -111,9 +125,10 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
     Returns:
         Clamped effort [N*m or N], float64, broadcast shape; never NaN.
     """
-    limit = envelope.effort_limit(velocity)  # >= 0, never NaN
     effort = np.asarray(effort, dtype=np.float64)
-    clamped = np.minimum(effort, limit, out=np.empty(np.broadcast_shapes(effort.shape, limit.shape)))
+    shape = broadcast_shape("clamp_effort", ("effort", "velocity"), (effort.shape, np.shape(velocity)))
+    limit = envelope.effort_limit(velocity)  # >= 0, never NaN
+    clamped = np.minimum(effort, limit, out=np.empty(shape))
     # -L as 0 - L, not np.negative: where L = 0 the lower bound is +0.0, so a let-go (L = 0) gives
     # +0.0 whatever the effort's sign (np.maximum returns its second operand on a tie), as torch
     # and Warp do; where L > 0 it is -L exactly and an effort of -0.0 stays -0.0
@@ -175,6 +190,11 @@ def clamp_effort_implicit(
         bad = float(r[negative].flat[0])
         raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
     requested = np.asarray(requested_effort, dtype=np.float64)
+    broadcast_shape(
+        "clamp_effort_implicit",
+        ("requested_effort", "velocity", "response", "applied_effort"),
+        (requested.shape, np.shape(velocity), r.shape, np.shape(applied_effort)),
+    )
     impulse = clamp_drive_impulse(
         velocity,
         np.asarray(applied_effort, dtype=np.float64) * step,
@@ -242,7 +262,7 @@ def clamp_drive_impulse(
             velocity_dependent_resistance,
         )
     ]
-    shape = np.broadcast_shapes(*(a.shape for a in args))
+    shape = broadcast_shape("clamp_drive_impulse", CLAMP_DRIVE_IMPULSE_ARGS, [a.shape for a in args])
     # IEEE overflow, inf - inf and x/0 happen inside PhysX too and are part of what we reproduce
     with np.errstate(divide="ignore", over="ignore", invalid="ignore", under="ignore"):
         if math.prod(shape) >= 2 * _BLOCK:

@@ -29,6 +29,7 @@ from drive_envelope._src.envelope.clamp import (
     CLAMP_DRIVE_IMPULSE_ARGS,
     PX_EPS_F32,
     PX_MAX_F32,
+    broadcast_shape,
     check_time_step,
 )
 from drive_envelope._src.errors import InputError
@@ -216,12 +217,8 @@ def _impulse_tensors(values: tuple[object, ...], dtype: Any, where: str) -> list
     import torch
 
     tensors = _tensors(values, dtype)
-    shapes = [tuple(t.shape) for t in tensors]
-    try:  # a user mistake, named as Warp names it (torch's own error is a RuntimeError)
-        np.broadcast_shapes(*shapes)
-    except ValueError:
-        listed = ", ".join(f"{n}={s}" for n, s in zip(CLAMP_DRIVE_IMPULSE_ARGS, shapes, strict=True))
-        raise InputError(f"{where}: shapes do not broadcast ({listed})") from None
+    # a user mistake, named as NumPy and Warp name it (torch's own error is a RuntimeError)
+    broadcast_shape(where, CLAMP_DRIVE_IMPULSE_ARGS, [tuple(t.shape) for t in tensors])
     return list(torch.broadcast_tensors(*tensors))
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS, check_time_step
+from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS, broadcast_shape, check_time_step
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
@@ -357,11 +357,7 @@ def clamp_drive_impulse(
         raise InputError(f"clamp_drive_impulse: Warp arrays on several devices ({', '.join(devices)})")
     device = next(iter(devices.values())) if devices else wp.get_device()
     shapes = [tuple(v.shape) if _is_warp_array(v) else np.shape(v) for v in values]
-    try:
-        shape = np.broadcast_shapes(*shapes)
-    except ValueError:
-        listed = ", ".join(f"{n}={s}" for n, s in zip(CLAMP_DRIVE_IMPULSE_ARGS, shapes, strict=True))
-        raise InputError(f"clamp_drive_impulse: shapes do not broadcast ({listed})") from None
+    shape = broadcast_shape("clamp_drive_impulse", CLAMP_DRIVE_IMPULSE_ARGS, shapes)
     n = int(np.prod(shape, dtype=np.int64))
     inputs = [_as_array(v, n, device, name) for v, name in zip(values, CLAMP_DRIVE_IMPULSE_ARGS, strict=True)]
     result = wp.empty(n, dtype=wp.float32, device=device)
