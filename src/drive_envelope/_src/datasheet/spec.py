@@ -282,8 +282,3 @@ class Transmission:
         """Joint speed-effort gradient of a motor gradient [(rad/s)/(N*m) or (m/s)/N]."""
         reduction = self.ratio * self.screw_factor
         return gradient / reduction / reduction  # not **2: an extreme ratio gives 0 or inf, not an error
-
-    def motor_resistance(self, resistance: float) -> float:
-        """Joint velocity-dependent resistance of a motor-side one [N*m*s/rad or N*s/m]."""
-        reduction = self.ratio * self.screw_factor
-        return resistance * reduction * reduction * self.efficiency * self.screw_efficiency

@@ -62,7 +62,6 @@ DEFAULT_FIT = (
 )
 """What ``--fit`` estimates when not given: the four envelope parameters."""
 _LOG_SCALE = ("max_effort", "max_actuator_velocity", "stiffness", "damping", "duty_effort")
-_ENVELOPE = DEFAULT_FIT
 
 
 def parameter_units(joint: str = "revolute") -> dict[str, str]:
@@ -256,8 +255,3 @@ def _interval(
     if name in _LOG_SCALE and start > 0.0:
         return (start / 10.0, start * 10.0), True
     return (0.0, max(10.0 * scale, 2.0 * start)), False
-
-
-def envelope_names() -> tuple[str, ...]:
-    """The four envelope parameters."""
-    return _ENVELOPE
