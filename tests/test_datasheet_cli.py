@@ -336,3 +336,15 @@ def test_an_unknown_override_key_lists_the_valid_ones(capsys: pytest.CaptureFixt
     assert main(["derive", "tmotor-ak80-6", "--set", "motor.nope=1"]) == 2
     err = capsys.readouterr().err
     assert "unknown key 'nope' in [motor]; valid keys in [motor]: " in err and "torque_constant" in err
+
+
+def test_a_read_only_output_needs_force(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The refusal names --force, so derive takes it as every command with -o does."""
+    target = tmp_path / "env.toml"
+    target.write_text("old", encoding="utf-8")
+    target.chmod(0o444)
+    assert main(["derive", "tmotor-ak80-6", "-o", str(target)]) == 2
+    assert "read-only (pass --force to replace it)" in capsys.readouterr().err
+    assert target.read_text(encoding="utf-8") == "old"
+    assert main(["derive", "tmotor-ak80-6", "-o", str(target), "--force"]) == 0
+    assert target.read_text(encoding="utf-8").startswith('name = "T-Motor AK80-6"')

@@ -6,7 +6,7 @@ import argparse
 import os
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument, add_output_argument
+from drive_envelope._src.cli.common import add_force_argument, add_format_argument, add_output_argument
 
 
 def register(subparsers: Any) -> None:
@@ -32,6 +32,7 @@ def register(subparsers: Any) -> None:
     add_output_argument(
         parser, "also write the envelope file here, atomically (format from the suffix: .toml, .json, .usda)"
     )
+    add_force_argument(parser)  # the read-only refusal names --force: every command with -o takes it
     parser.add_argument(
         "--duty",
         choices=("peak", "continuous"),
@@ -87,7 +88,7 @@ def _run(args: argparse.Namespace) -> int:
         sheet, duty=args.duty, gradient_method=args.gradient_method, approximate_line=args.approximate_line
     )
     if output is not None and file_format is not None:
-        atomic_write_text(output, envelope_text(derivation.envelope, file_format))
+        atomic_write_text(output, envelope_text(derivation.envelope, file_format), force=args.force)
     if args.format == "json":
         print(json.dumps(derivation.to_dict(), indent=2))
     elif args.format == "text":
