@@ -29,8 +29,9 @@ bool Inside(const DriveParams& p, double dt, double x, double v) {
 
 // solves a*x = b in place (b becomes x) for a general n x n row-major a, by Gaussian elimination
 // with partial pivoting; false if a is singular. Hand-written because the Newton system
-// (I - diag(slope)*A_off) is not symmetric and MuJoCo's public API (mujoco.h, 4.0) factors only
-// symmetric positive definite matrices (mju_cholFactor, used for the SPD block in constrained.cc)
+// (I - diag(slope)*A_off) is not symmetric where a slope is positive (SymmetricSolve takes every
+// other case) and MuJoCo's public API (mujoco.h, 4.0) factors only symmetric positive definite
+// matrices (mju_cholFactor: SymmetricSolve, and the SPD block in constrained.cc)
 bool LuSolve(double* a, double* b, int n) {
   for (int k = 0; k < n; k++) {
     int best = k;
