@@ -98,6 +98,7 @@ def looks_like_curve(path: str | os.PathLike[str]) -> bool:
     """
     file = Path(path)
     try:
+        input_file(file, str(file))  # a FIFO would block, a device never end: not opened
         header = csv_header(file, str(file))[1]
         log_plan(header, _curve_columns(LogColumns(), None), str(file))
     except InputError:
