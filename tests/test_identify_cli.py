@@ -370,3 +370,27 @@ def test_progress_lines_when_stderr_is_not_a_terminal(
     err = capsys.readouterr().err
     assert "identify: restart 1/2, search 1/2, best cost " in err
     assert "identify: restart 2/2, polish 1/30, best cost " in err  # the polish is shown too
+
+
+@pytest.mark.parametrize("command", ["identify", "replay"])
+def test_a_position_beyond_1e100_is_bad_input(
+    main: Callable[[list[str]], int],
+    bench: tuple[Path, list[Path]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+) -> None:
+    """Exit 2 naming the cell: identify overflowed inside SciPy (exit 1), replay printed 300 digits."""
+    stand, logs = bench
+    lines = logs[0].read_text(encoding="utf-8").splitlines()
+    fields = lines[51].split(",")
+    fields[1] = "1e300"
+    lines[51] = ",".join(fields)
+    log = tmp_path / "huge.csv"
+    log.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    argv = [command, str(log), "--stand", str(stand)]
+    if command == "identify":
+        argv += ["--fit", "max_effort", "--generations", "1", "--population", "1", "--restarts", "1"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "huge.csv: row 51, column 'position': got 1e+300 [SI]" in err[0]

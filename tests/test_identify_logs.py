@@ -79,6 +79,18 @@ def test_parquet_log(tmp_path: Path) -> None:
         ("time,position,target_position\n0,0,0\n1,0,0\n", "expected at least 3 samples"),
         ("time,position,position,target_position\n0,0,0,0\n", "column 'position' is ambiguous"),
         ("time,position,target_position\n0,0,0\n1,0\n", "row 2: 2 fields"),
+        (  # the search squared it into an OverflowError inside SciPy, exit 1
+            "time,position,target_position\n0,0,0\n1,1e300,0\n2,0,0\n",
+            "row 2, column 'position': got 1e+300 [SI]; expected |position| at most 1e+100",
+        ),
+        (
+            "time,position,target_position,velocity\n0,0,0,0\n1,0,0,0\n2,0,-2e100,0\n",
+            "row 3, column 'target_position': got -2e+100 [SI]",
+        ),
+        (
+            "time,position,target_position,velocity\n0,0,0,0\n1,0,0,1e101\n2,0,0,0\n",
+            "row 2, column 'velocity': got 1e+101 [SI]",
+        ),
     ],
 )
 def test_bad_logs_are_one_line(tmp_path: Path, text: str, message: str) -> None:

@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.analysis.columns import ColumnPlan, Role, plan_columns
+from drive_envelope._src.analysis.fit_input import MAX_SAMPLE
 from drive_envelope._src.analysis.log_arrow import arrow_numeric
 from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.analysis.log_csv import csv_rows, parse_cells
@@ -107,9 +108,9 @@ def read_bench_log(
 
     Raises:
         InputError: a missing file or column, a cell that is not a finite number (naming the row
-            and column), fewer than 3 rows, a time column off a uniform grid, a ``torque_enable``
-            other than 0/1, or a sidecar that is not a JSON object with a positive
-            ``kp_duty_per_rad``; for a bag, no command topic or a joint it does not have.
+            and column) or beyond 1e100 in magnitude, fewer than 3 rows, a time column off a
+            uniform grid, a ``torque_enable`` other than 0/1, or a sidecar that is not a JSON object
+            with a positive ``kp_duty_per_rad``; for a bag, no command topic or a joint it does not have.
     """
     file = Path(path)
     label = str(file)
@@ -123,6 +124,7 @@ def read_bench_log(
     if rows < 3:
         raise InputError(f"{label}: {rows} data rows; expected at least 3 samples")
     _check_grid(columns["time"], label)
+    _check_magnitudes(columns, label)
     enable = columns.get("torque_enable")
     if enable is not None and not np.isin(enable, (0.0, 1.0)).all():
         row = int(np.flatnonzero(~np.isin(enable, (0.0, 1.0)))[0])
@@ -236,6 +238,25 @@ def _check_grid(time: FloatArray, label: str) -> None:
             f"{label}: row {row}, column 'time': step {float(steps[off[0]]):.6g} s; expected a uniform grid "
             f"of {dt:.6g} s (+-{100 * _GRID_TOLERANCE:g} %): resample the log"
         )
+
+
+def _check_magnitudes(columns: Mapping[str, FloatArray], label: str) -> None:
+    """Refuse a state or target beyond ``MAX_SAMPLE`` [SI], as ``fit`` does.
+
+    The search squares the position errors (and scales its loss by them): a cell of 1e300 overflowed
+    inside SciPy, and a replay printed a 300-digit error. Real joints stay below 1e6 rad or m.
+    """
+    for name in ("position", "target_position", "velocity", "effort", "target_velocity"):
+        values = columns.get(name)
+        if values is None:
+            continue
+        beyond = np.flatnonzero(np.abs(values) > MAX_SAMPLE)
+        if beyond.size:
+            row = int(beyond[0])
+            raise InputError(
+                f"{label}: row {row + 1}, column {name!r}: got {float(values[row]):.6g} [SI]; expected "
+                f"|{name}| at most {MAX_SAMPLE:g} (check the log's units)"
+            )
 
 
 def _sidecar(file: Path) -> dict[str, Any] | None:
