@@ -9,7 +9,9 @@ everywhere: ``"file: unknown key 'servo.dutty'" (did you mean 'duty_per_rad'?); 
 from __future__ import annotations
 
 import difflib
-from collections.abc import Collection, Iterable
+from collections.abc import Collection, Iterable, Sequence
+
+import numpy as np
 
 from drive_envelope._src.errors import InputError
 
@@ -64,3 +66,16 @@ def keyed_error(where: str, exc: InputError) -> InputError:
     file and key the joint came from; an empty ``where`` (no map) leaves the message as it is.
     """
     return InputError(f"{where}: {exc}" if where else str(exc))
+
+
+def broadcast_shape(where: str, names: Sequence[str], shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:
+    """The broadcast shape of the arguments, or one InputError naming each argument's shape.
+
+    Every backend's rule (NumPy, torch and Warp name a mismatch the same way): shapes that do not
+    broadcast are a user mistake, not NumPy's ``ValueError`` or torch's ``RuntimeError``.
+    """
+    try:
+        return tuple(np.broadcast_shapes(*shapes))
+    except ValueError:
+        listed = ", ".join(f"{n}={tuple(s)}" for n, s in zip(names, shapes, strict=True))
+        raise InputError(f"{where}: shapes do not broadcast ({listed})") from None

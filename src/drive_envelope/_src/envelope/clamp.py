@@ -55,19 +55,15 @@ issue's goal of 10x is not met (the remaining ~35 passes each cost about a third
 literal float32 port. Selects on the request's sign are done on bit patterns (``_select``): ``numpy.where``
 under a mask that flips at random costs ten integer passes.
 
-Why NumPy and torch each have their own port of the same algorithm (``kernels/torch_ops.py``):
-the shortcuts above are data-dependent branches, which torch must not take (a host sync on a GPU,
-a graph break under ``torch.compile``), and the bit-pattern selects and ``out=`` buffers have no
-array-API form. One branch-free array-API version, the torch port written against a namespace
-``xp``, gives the same numbers but takes 3.6x the NumPy core's time in float64 and 4.1x in
-float32, while it only ties the torch port (``python benchmarks/bench_array_api_clamp.py``,
-N = 1e6, thread CPU time, 2-core EPYC, 2026-12-03).
+Why torch has its own port (``kernels/torch_ops.py``): it must not take these data-dependent
+branches (host syncs, graph breaks), and the bit selects and ``out=`` buffers have no array-API
+form. One branch-free array-API version gives the same numbers at 3.6x the NumPy core's time in
+float64 and 4.1x in float32 and only ties the torch port (``benchmarks/bench_array_api_clamp.py``).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -75,6 +71,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.validation import broadcast_shape
 
 PX_EPS_F32 = float(np.finfo(np.float32).eps)
 """PhysX's absolute epsilon for near-zero denominators, ``FLT_EPSILON = 2^-23``."""
@@ -93,19 +90,6 @@ CLAMP_DRIVE_IMPULSE_ARGS = (
 """Argument names of :func:`clamp_drive_impulse`, in PhysX's order (every backend uses them)."""
 
 Array = npt.NDArray[Any]
-
-
-def broadcast_shape(where: str, names: Sequence[str], shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:
-    """The broadcast shape of the arguments, or one InputError naming each argument's shape.
-
-    Every backend's rule (NumPy, torch and Warp name a mismatch the same way): shapes that do not
-    broadcast are a user mistake, not NumPy's ``ValueError`` or torch's ``RuntimeError``.
-    """
-    try:
-        return tuple(np.broadcast_shapes(*shapes))
-    except ValueError:
-        listed = ", ".join(f"{n}={tuple(s)}" for n, s in zip(names, shapes, strict=True))
-        raise InputError(f"{where}: shapes do not broadcast ({listed})") from None
 
 
 def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity: npt.ArrayLike) -> Array:

@@ -29,7 +29,6 @@ from drive_envelope._src.envelope.clamp import (
     CLAMP_DRIVE_IMPULSE_ARGS,
     PX_EPS_F32,
     PX_MAX_F32,
-    broadcast_shape,
     check_time_step,
 )
 from drive_envelope._src.errors import InputError
@@ -41,6 +40,7 @@ from drive_envelope._src.kernels.torch_envelope import (
     resolve_dtype,
     state_tensors,
 )
+from drive_envelope._src.validation import broadcast_shape
 
 if TYPE_CHECKING:
     import torch
