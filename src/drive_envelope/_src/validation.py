@@ -3,7 +3,7 @@
 Every file, table and override that takes named keys (datasheets, scenarios, envelope tables,
 bench-stand files, joint maps) refuses an unknown key here, so the message reads the same
 everywhere: ``"file: unknown key 'servo.dutty'" (did you mean 'duty_per_rad'?); valid keys in
-[servo]: ..."``.
+[servo]: ..."``. Arrays whose shapes do not broadcast are refused here too, in every backend.
 """
 
 from __future__ import annotations
