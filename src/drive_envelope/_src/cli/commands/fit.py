@@ -127,6 +127,8 @@ def _fixed(items: list[str], joint: str) -> dict[str, float]:
             raise InputError(
                 f"--fix {item!r}: unknown parameter {name!r}{nearest_key(name, ENVELOPE_FIELDS)}"
             )
+        if name in fixed:  # the last would win silently: refused, as derive's --set
+            raise InputError(f"--fix {name!r} given twice; give each parameter once")
         text = value.strip()
         number: object = float(text) if _is_number(text) else text
         fixed[name] = read_quantity(number, si_unit(name, joint), f"--fix {name}")
