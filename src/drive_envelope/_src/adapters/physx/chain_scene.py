@@ -27,7 +27,7 @@ import math
 import warnings
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.adapters.physx.scene import _set
+from drive_envelope._src.adapters.physx.scene import _set, define_articulation_root, define_physics_scene
 from drive_envelope._src.scenario.chain_frames import (
     IDENTITY,
     Quaternion,
@@ -97,43 +97,15 @@ def build_chain_stage(scenario: ChainScenario) -> Usd.Stage:
     from drive_envelope._src.adapters.usd.stage import register_schemas
 
     register_schemas()
-    from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics
+    from pxr import Sdf, Usd, UsdGeom, UsdPhysics
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/World").GetPrim())
-    sim = scenario.simulation
-    scene = UsdPhysics.Scene.Define(stage, "/World/physicsScene")
-    scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, 0.0, -1.0))
-    scene.CreateGravityMagnitudeAttr().Set(float(sim.gravity))
-    prim = scene.GetPrim()
-    prim.ApplyAPI("PhysxSceneAPI")
-    _set(prim, "physxScene:solverType", Sdf.ValueTypeNames.Token, sim.solver.upper())
-    _set(prim, "physxScene:timeStepsPerSecond", Sdf.ValueTypeNames.UInt, max(1, round(1.0 / sim.dt)))
-    _set(prim, "physxScene:enableExternalForcesEveryIteration", Sdf.ValueTypeNames.Bool, True)
-    _set(prim, "physxScene:enableStabilization", Sdf.ValueTypeNames.Bool, False)
-    _set(prim, "physxScene:enableGPUDynamics", Sdf.ValueTypeNames.Bool, False)
-    _set(prim, "physxScene:broadphaseType", Sdf.ValueTypeNames.Token, "MBP")
-    root = UsdGeom.Xform.Define(stage, CHAIN_PATH).GetPrim()
-    UsdPhysics.ArticulationRootAPI.Apply(root)
-    root.ApplyAPI("PhysxArticulationAPI")
-    _set(
-        root,
-        "physxArticulation:solverPositionIterationCount",
-        Sdf.ValueTypeNames.Int,
-        sim.position_iterations,
-    )
-    _set(
-        root,
-        "physxArticulation:solverVelocityIterationCount",
-        Sdf.ValueTypeNames.Int,
-        sim.velocity_iterations,
-    )
-    _set(root, "physxArticulation:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
-    _set(root, "physxArticulation:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
-    _set(root, "physxArticulation:enabledSelfCollisions", Sdf.ValueTypeNames.Bool, False)
+    define_physics_scene(stage, scenario.simulation, (0.0, 0.0, -1.0), float(scenario.simulation.gravity))
+    define_articulation_root(stage, CHAIN_PATH, scenario.simulation)
     _body(stage, _BASE, mass=1.0, inertia=(1.0, 1.0, 1.0), com=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0))
     fixed = UsdPhysics.FixedJoint.Define(stage, f"{CHAIN_PATH}/rootJoint")
     fixed.CreateBody1Rel().SetTargets([Sdf.Path(_BASE)])

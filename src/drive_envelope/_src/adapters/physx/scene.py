@@ -35,7 +35,7 @@ from drive_envelope._src.adapters.usd.scale import StageUnits
 if TYPE_CHECKING:
     from pxr import Usd
 
-    from drive_envelope._src.scenario.spec import Scenario
+    from drive_envelope._src.scenario.spec import Scenario, SimulationSpec
 
 ARTICULATION_PATH = "/World/stand"
 """Prim path of the articulation root (the tensor-binding pattern)."""
@@ -72,25 +72,7 @@ def build_teststand_stage(
     world = UsdGeom.Xform.Define(stage, "/World")
     stage.SetDefaultPrim(world.GetPrim())
     _define_scene(stage, scenario, units)
-    root = UsdGeom.Xform.Define(stage, ARTICULATION_PATH).GetPrim()
-    UsdPhysics.ArticulationRootAPI.Apply(root)
-    root.ApplyAPI("PhysxArticulationAPI")
-    sim = scenario.simulation
-    _set(
-        root,
-        "physxArticulation:solverPositionIterationCount",
-        Sdf.ValueTypeNames.Int,
-        sim.position_iterations,
-    )
-    _set(
-        root,
-        "physxArticulation:solverVelocityIterationCount",
-        Sdf.ValueTypeNames.Int,
-        sim.velocity_iterations,
-    )
-    _set(root, "physxArticulation:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
-    _set(root, "physxArticulation:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
-    _set(root, "physxArticulation:enabledSelfCollisions", Sdf.ValueTypeNames.Bool, False)
+    define_articulation_root(stage, ARTICULATION_PATH, scenario.simulation)
     _define_body(stage, f"{ARTICULATION_PATH}/base", mass=1.0, inertia=(1.0, 1.0, 1.0))
     fixed = UsdPhysics.FixedJoint.Define(stage, f"{ARTICULATION_PATH}/rootJoint")
     fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{ARTICULATION_PATH}/base")])
@@ -121,18 +103,24 @@ def _set(prim: Usd.Prim, name: str, type_name: object, value: object) -> None:
 
 
 def _define_scene(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
+    if scenario.pendulum is None:
+        define_physics_scene(stage, scenario.simulation, (0.0, 0.0, -1.0), 0.0)
+    else:  # perpendicular to the revolute joint's Z axis
+        gravity = float(scenario.simulation.gravity * units.length())
+        define_physics_scene(stage, scenario.simulation, (0.0, -1.0, 0.0), gravity)
+
+
+def define_physics_scene(
+    stage: Usd.Stage, sim: SimulationSpec, direction: tuple[float, float, float], gravity: float
+) -> None:
+    """``/World/physicsScene``: gravity [m/s^2 in stage units] along ``direction``, the solver settings."""
     from pxr import Gf, Sdf, UsdPhysics
 
     scene = UsdPhysics.Scene.Define(stage, "/World/physicsScene")
-    if scenario.pendulum is None:
-        scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, 0.0, -1.0))
-        scene.CreateGravityMagnitudeAttr().Set(0.0)
-    else:  # perpendicular to the revolute joint's Z axis
-        scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(0.0, -1.0, 0.0))
-        scene.CreateGravityMagnitudeAttr().Set(float(scenario.simulation.gravity * units.length()))
+    scene.CreateGravityDirectionAttr().Set(Gf.Vec3f(*direction))
+    scene.CreateGravityMagnitudeAttr().Set(float(gravity))
     prim = scene.GetPrim()
     prim.ApplyAPI("PhysxSceneAPI")
-    sim = scenario.simulation
     _set(prim, "physxScene:solverType", Sdf.ValueTypeNames.Token, sim.solver.upper())
     _set(prim, "physxScene:timeStepsPerSecond", Sdf.ValueTypeNames.UInt, max(1, round(1.0 / sim.dt)))
     # explicit, as the reference engine models it (TGS: forces and envelope clamp per substep).
@@ -142,6 +130,21 @@ def _define_scene(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> No
     _set(prim, "physxScene:enableStabilization", Sdf.ValueTypeNames.Bool, False)
     _set(prim, "physxScene:enableGPUDynamics", Sdf.ValueTypeNames.Bool, False)
     _set(prim, "physxScene:broadphaseType", Sdf.ValueTypeNames.Token, "MBP")
+
+
+def define_articulation_root(stage: Usd.Stage, path: str, sim: SimulationSpec) -> None:
+    """An articulation root at ``path``: its iteration counts; no sleep, stabilization or self-collision."""
+    from pxr import Sdf, UsdGeom, UsdPhysics
+
+    root = UsdGeom.Xform.Define(stage, path).GetPrim()
+    UsdPhysics.ArticulationRootAPI.Apply(root)
+    root.ApplyAPI("PhysxArticulationAPI")
+    counts = (("Position", sim.position_iterations), ("Velocity", sim.velocity_iterations))
+    for kind, count in counts:
+        _set(root, f"physxArticulation:solver{kind}IterationCount", Sdf.ValueTypeNames.Int, count)
+    _set(root, "physxArticulation:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    _set(root, "physxArticulation:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    _set(root, "physxArticulation:enabledSelfCollisions", Sdf.ValueTypeNames.Bool, False)
 
 
 def _define_body(
