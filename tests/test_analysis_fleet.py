@@ -163,3 +163,27 @@ def test_merge_refuses_parts_checked_differently(tmp_path: Path) -> None:
     c = check_log(PerformanceEnvelope(max_effort=5.0), table)
     with pytest.raises(InputError, match="joint 'joint' has two envelopes"):
         merge_reports([a, c], "fleet")
+
+
+@pytest.mark.parametrize(
+    ("scheduler", "message"),
+    [
+        ("nonsense", "missing port number in address 'nonsense'"),
+        ("tcp://host:abc", "invalid literal for int()"),
+        ("foo://x:1", "unknown address scheme 'foo'"),
+    ],
+)
+def test_a_malformed_scheduler_address_is_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], scheduler: str, message: str
+) -> None:
+    """Exit 2 with one line: distributed's ValueError for the address was an internal error (exit 1)."""
+    pytest.importorskip("distributed")
+    from drive_envelope._src.cli.main import main
+
+    _write_csv(tmp_path / "fleet" / "log0.csv", _columns(0))
+    envelope = tmp_path / "env.toml"
+    envelope.write_text("max_effort = 10.0\nmax_actuator_velocity = 3.0\n", encoding="utf-8")
+    assert main(["check", str(envelope), str(tmp_path / "fleet"), "--scheduler", scheduler]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--scheduler {scheduler!r}: {message}" in err[0]
+    assert "expected an address such as tcp://HOST:8786" in err[0]

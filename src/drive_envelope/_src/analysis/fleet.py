@@ -314,6 +314,11 @@ def _on_cluster(
         client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise InputError(f"--scheduler {scheduler!r}: cannot connect: {' '.join(str(exc).split())}") from None
+    except ValueError as exc:  # distributed's address parser: no port, a bad scheme ('nonsense')
+        raise InputError(
+            f"--scheduler {scheduler!r}: {' '.join(str(exc).split())}; expected an address such as "
+            "tcp://HOST:8786"
+        ) from None
     with client:
         workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
         futures = client.map(
