@@ -161,6 +161,15 @@ class SimulationSpec:
     """Gravitational acceleration on a ``[pendulum]`` [m/s^2]; ``>= 0``. The stand has no
     gravity otherwise (the link's centre of mass is on the joint axis)."""
 
+    def metadata(self) -> dict[str, object]:
+        """The solver settings under the metadata keys every engine's trajectory carries."""
+        return {
+            "solver": self.solver,
+            "dt": self.dt,
+            "position_iterations": self.position_iterations,
+            "velocity_iterations": self.velocity_iterations,
+        }
+
     def __post_init__(self) -> None:
         _check_finite("simulation.dt", self.dt, positive=True)
         _check_finite("simulation.gravity", self.gravity, nonnegative=True)

@@ -280,10 +280,7 @@ def _metadata(scenario: Scenario) -> dict[str, object]:
 
     sim = scenario.simulation
     return {
-        "solver": sim.solver,
-        "dt": sim.dt,
-        "position_iterations": sim.position_iterations,
-        "velocity_iterations": sim.velocity_iterations,
+        **sim.metadata(),
         "plugin_solver": sim.solver,
         "mujoco_version": str(mujoco.__version__),
         "integrator": "Euler",
@@ -410,10 +407,7 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
         engine="mujoco",
         name=scenario.name,
         metadata={
-            "solver": sim.solver,
-            "dt": sim.dt,
-            "position_iterations": sim.position_iterations,
-            "velocity_iterations": sim.velocity_iterations,
+            **sim.metadata(),
             "mujoco_version": str(mujoco.__version__),
             "integrator": "Euler",
             "plugin": "drive_envelope.envelope",

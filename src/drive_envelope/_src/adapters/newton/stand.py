@@ -393,10 +393,7 @@ def _metadata(scenario: Scenario, drive: str) -> dict[str, object]:
 
     sim = scenario.simulation
     data: dict[str, object] = {
-        "solver": sim.solver,
-        "dt": sim.dt,
-        "position_iterations": sim.position_iterations,
-        "velocity_iterations": sim.velocity_iterations,
+        **sim.metadata(),
         "newton_version": str(newton.__version__),
         "newton_solver": "SolverFeatherstone",
         "drive": drive,

@@ -68,10 +68,7 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
         engine="physx",
         name=scenario.name,
         metadata={
-            "solver": sim.solver,
-            "dt": sim.dt,
-            "position_iterations": sim.position_iterations,
-            "velocity_iterations": sim.velocity_iterations,
+            **sim.metadata(),
             "precision": "float32",
             "effort_source": EFFORT_SOURCE,
         },

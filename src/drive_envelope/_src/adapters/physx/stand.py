@@ -171,10 +171,7 @@ def _trajectory(scenario: Scenario, result: PhysxResult) -> Trajectory:
         engine="physx",
         name=scenario.name,
         metadata={
-            "solver": sim.solver,
-            "dt": sim.dt,
-            "position_iterations": sim.position_iterations,
-            "velocity_iterations": sim.velocity_iterations,
+            **sim.metadata(),
             "precision": "float32",
             "effort_source": EFFORT_SOURCE_FRICTION if scenario.friction.active else EFFORT_SOURCE,
             "engine_version": _ovphysx_version(),

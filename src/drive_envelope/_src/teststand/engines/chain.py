@@ -282,10 +282,7 @@ def simulate_chain(
         engine="reference",
         name=scenario.name,
         metadata={
-            "solver": sim.solver,
-            "dt": sim.dt,
-            "position_iterations": sim.position_iterations,
-            "velocity_iterations": sim.velocity_iterations,
+            **sim.metadata(),
             "precision": "float64",
             "effort_source": "drive impulse / dt + applied effort (total actuator effort)",
         },

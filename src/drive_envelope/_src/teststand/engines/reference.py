@@ -190,9 +190,6 @@ def simulate(
 def _metadata(scenario: Scenario) -> dict[str, object]:
     sim = scenario.simulation
     return {
-        "solver": sim.solver,
-        "dt": sim.dt,
-        "position_iterations": sim.position_iterations,
-        "velocity_iterations": sim.velocity_iterations,
+        **sim.metadata(),
         "precision": "float64",
     }
