@@ -80,6 +80,25 @@ def test_infinite_speed_limit_skips_eq2() -> None:
     assert check.velocity is None and check.samples_outside == 0
 
 
+def test_infinite_max_effort_gives_infinite_eq1_margins(tmp_path: Path) -> None:
+    """Check eq. 2 alone when max_effort is inf (an envelope file may say so, as PhysX's maxForce).
+
+    The inf margins were cast to a histogram bin as a huge negative integer: a RuntimeWarning, then
+    bincount's ValueError, an internal error (exit 1) from the CLI.
+    """
+    envelope = PerformanceEnvelope(max_effort=float("inf"), max_actuator_velocity=3.0)
+    check = check_samples(envelope, [0.0, 2.0, 4.0], [1e6, -5.0, 0.5])
+    assert check.effort.minimum == float("inf") and check.effort.samples_outside == 0
+    assert all(value == float("inf") for _, value in check.effort.quantiles)
+    assert check.velocity is not None and check.samples_outside == 1
+    assert check.velocity.minimum == pytest.approx(-1.0)
+    env_file = tmp_path / "inf.toml"
+    env_file.write_text('max_effort = "inf"\nmax_actuator_velocity = 3.0\n', encoding="utf-8")
+    log = tmp_path / "log.csv"
+    log.write_text("velocity,effort\n0,1e6\n2,-5\n4,0.5\n", encoding="utf-8")
+    assert main(["check", str(env_file), str(log)]) == 1  # one sample beyond eq. 2: a failed gate
+
+
 def test_margin_quantiles_match_numpy_within_the_bin_width() -> None:
     """Agree with exact (inverted-CDF) quantiles of the margins to half a bin, 0.05 % of the cap."""
     rng = np.random.default_rng(3)

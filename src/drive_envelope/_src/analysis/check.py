@@ -83,7 +83,8 @@ class _Curve:
         if self.inverse_bin is not None:
             position = margin * self.inverse_bin
             position += 1.0 - _LOW / _WIDTH
-            np.maximum(position, 0.0, out=position)  # a margin never exceeds its cap: no upper clip
+            # a finite cap bounds its margin; an infinite one (max_effort = inf) gives inf margins
+            np.clip(position, 0.0, _BINS + 1.0, out=position)
         else:  # a subnormal cap times the bin width is 0: divide by the cap first, clip both ends
             position = margin / self.scale
             position *= 1.0 / _WIDTH
@@ -139,8 +140,8 @@ def histogram_quantile(
     k = int(np.searchsorted(np.cumsum(histogram), rank))
     if k == 0:  # below -100 % of the cap: the exact minimum is the best bound we kept
         return minimum
-    if k == _BINS + 1:
-        return scale * _HIGH
+    if k == _BINS + 1:  # at the cap; beyond it only for an infinite cap, where the minimum may be inf
+        return max(scale * _HIGH, minimum)
     return scale * max(_LOW + (k - 0.5) * _WIDTH, minimum / scale)
 
 
