@@ -39,6 +39,20 @@ def test_show_prints_table_and_corners(capsys: pytest.CaptureFixture[str]) -> No
     assert "stall" in out and "corner" in out and "no-load" in out
 
 
+def test_show_an_unlimited_effort_stalls_at_inf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """max_effort = inf without a speed line: the stall effort is inf (the table said 0)."""
+    path = tmp_path / "e.toml"
+    path.write_text('max_effort = "inf"\nmax_actuator_velocity = 3.0\n', encoding="utf-8")
+    assert main(["envelope", "show", str(path)]) == 0
+    out = capsys.readouterr().out
+    rows = {line.split()[0]: line.split()[1:] for line in out.splitlines() if line}
+    assert rows["stall"] == ["0", "inf"] and rows["no-load"] == ["3", "0"] and "both curves bind" not in out
+    path.write_text('max_effort = "inf"\nmax_actuator_velocity = 3.0\nspeed_effort_gradient = 0.5\n')
+    assert main(["envelope", "show", str(path)]) == 0
+    rows = {line.split()[0]: line.split()[1:] for line in capsys.readouterr().out.splitlines() if line}
+    assert rows["stall"] == ["0", "6"]  # the speed line reaches zero speed at 3 / 0.5
+
+
 def test_show_json_round_trips(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Print JSON that reads back as the same envelope, inf included."""
     env = PerformanceEnvelope(max_effort=2.5, velocity_dependent_resistance=0.1, name="x")

@@ -90,10 +90,12 @@ def envelope_table(envelope: PerformanceEnvelope) -> str:
     parts.append(format_table(["parameter", "value", "unit"], rows))
     v_unit, e_unit = si_unit("max_actuator_velocity", envelope.joint), si_unit("max_effort", envelope.joint)
     unbounded = math.isinf(envelope.no_load_velocity())
-    corners = envelope.corners(velocity_extent=1.0 if unbounded else None)
-    corner_rows = [["stall", *map(format_value, corners.stall)]]
-    if corners.corner is not None and not unbounded:  # unbounded: the "corner" is only the cut at 1
-        corner_rows.append(["corner (both curves bind)", *map(format_value, corners.corner)])
+    stall = envelope.stall_effort()
+    corner_rows = [["stall", format_value(0.0), format_value(stall)]]
+    if math.isfinite(stall):  # max_effort = inf without a speed line: no polygon to clip (it showed 0)
+        corners = envelope.corners(velocity_extent=1.0 if unbounded else None)
+        if corners.corner is not None and not unbounded:  # unbounded: the "corner" is the cut at 1
+            corner_rows.append(["corner (both curves bind)", *map(format_value, corners.corner)])
     no_load = (envelope.no_load_velocity(), 0.0)
     corner_rows.append(["no-load", *map(format_value, no_load)])
     parts.append("")
