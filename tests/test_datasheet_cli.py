@@ -348,3 +348,11 @@ def test_a_read_only_output_needs_force(tmp_path: Path, capsys: pytest.CaptureFi
     assert target.read_text(encoding="utf-8") == "old"
     assert main(["derive", "tmotor-ak80-6", "-o", str(target), "--force"]) == 0
     assert target.read_text(encoding="utf-8").startswith('name = "T-Motor AK80-6"')
+
+
+def test_the_output_cannot_be_the_datasheet(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """derive SHEET -o SHEET replaced the datasheet with its envelope without a word."""
+    sheet = write(tmp_path, AK80)
+    assert main(["derive", str(sheet), "-o", str(sheet)]) == 2
+    assert "is the datasheet itself: write the envelope to a new file" in capsys.readouterr().err
+    assert sheet.read_text(encoding="utf-8") == AK80
