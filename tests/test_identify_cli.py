@@ -199,6 +199,14 @@ def test_mujoco_replay_reports_its_error(
         (["--plot", "{tmp}/fig.gif"], "expected a .png, .svg or .pdf file name"),
         (["--fit", "stiffness"], "ties stiffness to max_effort"),
         (["--restarts", "0"], "--restarts: expected an integer in 1..100"),
+        (  # both were written, the envelope last: the identified stand was lost
+            ["-o", "{tmp}/out.toml", "--envelope-output", "{tmp}/out.toml"],
+            "--envelope-output '{tmp}/out.toml' is also --output",
+        ),
+        (
+            ["--envelope-output", "{tmp}/stand.toml"],
+            "--envelope-output '{tmp}/stand.toml' is the --stand file",
+        ),
     ],
 )
 def test_bad_requests_are_one_line(
@@ -221,7 +229,7 @@ def test_bad_requests_are_one_line(
     before = set(tmp_path.iterdir())
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and message in err[0]
+    assert len(err) == 1 and message.replace("{tmp}", str(tmp_path)) in err[0]
     assert set(tmp_path.iterdir()) == before
 
 

@@ -163,6 +163,7 @@ def _run(args: argparse.Namespace) -> int:
         from drive_envelope._src.plots.figure import check_figure_path
 
         check_figure_path(plot, "--plot")
+    _check_apart(output, envelope_output, args.stand)
     for path in (output, envelope_output, plot):  # before the search, which takes a while
         if path is not None:
             check_writable(path, force=args.force)
@@ -225,6 +226,34 @@ def _check_path(path: str, flag: str, what: str) -> None:
 
     if Path(path).suffix.lower() not in (".toml", ".json"):
         raise InputError(f"{flag} {path!r}: expected {what} name ending in .toml or .json")
+
+
+def _check_apart(output: str | None, envelope_output: str | None, stand: str) -> None:
+    """Refuse the envelope file on the identified stand's file or on the --stand it started from.
+
+    Both were written without a word, the envelope last: the stand was lost. ``-o`` may be the
+    ``--stand`` file (a search refined in place).
+    """
+    import os
+
+    from drive_envelope._src.errors import InputError
+
+    def same(a: str, b: str) -> bool:
+        real = os.path.realpath(a) == os.path.realpath(b)
+        return real or (os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b))
+
+    if envelope_output is None:
+        return
+    if output is not None and same(output, envelope_output):
+        raise InputError(
+            f"--envelope-output {envelope_output!r} is also --output: give the stand and the envelope "
+            "two files"
+        )
+    if same(stand, envelope_output):
+        raise InputError(
+            f"--envelope-output {envelope_output!r} is the --stand file: the envelope would replace the "
+            "stand; give a new file"
+        )
 
 
 def _stand_comments(args: argparse.Namespace, result: Any) -> list[str]:
