@@ -508,3 +508,16 @@ def test_a_row_with_too_many_fields_exits_2(
     log = write_text_log(tmp_path / "long.csv", "time,velocity,effort\n0,0,1\n0.1,5,11,7\n0.2,1,1\n")
     for args in (["check", str(bench_envelope_file), str(log)], ["fit", str(log)]):
         assert "row 2 (line 3): 4 fields" in one_line_error(*run_cli(args, capsys)[::2])
+
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
+
+
+def test_fit_output_cannot_be_its_log(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """fit RUN.json -o RUN.json (simulate's JSON trajectory) replaced the log with the envelope."""
+    run = tmp_path / "run.json"
+    assert main(["simulate", str(SCENARIOS / "velocity_saturation_tgs.toml"), "-o", str(run)]) == 0
+    text = run.read_text(encoding="utf-8")
+    assert main(["fit", str(run), "-o", str(run)]) == 2
+    assert f"--output '{run}' is the log itself: write the envelope to a new file" in capsys.readouterr().err
+    assert run.read_text(encoding="utf-8") == text

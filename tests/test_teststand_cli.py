@@ -262,3 +262,18 @@ def test_a_duration_that_is_not_whole_steps_says_where_the_run_ends(
     assert main(argv) == 0  # 0.1 s / 0.03 s = 3.33: 3 steps, to 0.09 s
     assert "simulating round(duration / dt) = 3 steps, to 0.09 s" in capsys.readouterr().err
     assert len(out.read_text().strip().splitlines()) == 1 + 4  # header, initial state, 3 steps
+
+
+def test_the_output_cannot_be_the_scenario(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """simulate RUN.json -o RUN.json replaced the scenario with its trajectory without a word."""
+    import tomllib
+
+    scenario = tmp_path / "run.json"
+    text = json.dumps(tomllib.loads(SATURATION.read_text(encoding="utf-8")))
+    scenario.write_text(text, encoding="utf-8")
+    (tmp_path / "link.json").symlink_to(scenario)
+    for output in (scenario, tmp_path / "link.json"):
+        assert main(["simulate", str(scenario), "-o", str(output)]) == 2
+        err = capsys.readouterr().err
+        assert f"--output '{output}' is the scenario itself: write the trajectory to a new file" in err
+    assert scenario.read_text(encoding="utf-8") == text

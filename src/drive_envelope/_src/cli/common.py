@@ -142,6 +142,26 @@ def checked_output(output: str | None, flag: str = "--output") -> str | None:
     return output
 
 
+def refuse_input_as_output(output: str | None, source: str | None, what: str, result: str) -> None:
+    """Refuse ``--output`` naming the command's input file: the result would replace it silently.
+
+    Args:
+        output: The output file name, or None.
+        source: The input file (a datasheet, scenario or log), or None.
+        what: The input, for the message (``"the scenario"``).
+        result: What would be written (``"the trajectory"``).
+
+    Raises:
+        InputError: both exist and are one file (a symlink or another spelling of the name too).
+    """
+    import os
+
+    if output is None or source is None or not (os.path.exists(output) and os.path.exists(source)):
+        return
+    if os.path.samefile(output, source):
+        raise InputError(f"--output {output!r} is {what} itself: write {result} to a new file")
+
+
 class Progress:
     """A one-line progress bar on stderr for long runs, shown only when stderr is a terminal.
 

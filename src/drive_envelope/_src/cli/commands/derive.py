@@ -63,7 +63,7 @@ def register(subparsers: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     import json
 
-    from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.cli.common import checked_output, refuse_input_as_output, status, warn
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import load_datasheet
@@ -72,11 +72,7 @@ def _run(args: argparse.Namespace) -> int:
 
     output = checked_output(args.output)
     file_format = _format_from_suffix(output) if output is not None else None
-    if output is not None and os.path.exists(output) and os.path.exists(args.spec):
-        if os.path.samefile(output, args.spec):  # the envelope would replace the datasheet it came from
-            from drive_envelope._src.errors import InputError
-
-            raise InputError(f"--output {output!r} is the datasheet itself: write the envelope to a new file")
+    refuse_input_as_output(output, args.spec, "the datasheet", "the envelope")
     overrides = _overrides(args.set)
     if os.path.exists(args.spec):  # not is_file(): a FIFO or a device is refused by type when read
         sheet = load_datasheet(args.spec, overrides=overrides)

@@ -150,13 +150,15 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.fit import FitOptions
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_fit
-    from drive_envelope._src.cli.common import checked_output, status
+    from drive_envelope._src.cli.common import checked_output, refuse_input_as_output, status
     from drive_envelope._src.errors import InputError
     from drive_envelope._src.io.envelope_file import save_envelope
 
     output = checked_output(args.output)
     if output is not None and Path(output).suffix.lower() not in (".toml", ".json"):
         raise InputError(f"--output {output!r}: expected an envelope file name ending in .toml or .json")
+    source = args.from_curve or args.log  # simulate's JSON trajectory is a log with a .json name
+    refuse_input_as_output(output, source, "the curve" if args.from_curve else "the log", "the envelope")
     options = FitOptions(
         joint=args.joint,
         outlier_quantile=args.outlier_quantile,

@@ -83,7 +83,7 @@ def register(subparsers: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     import warnings
 
-    from drive_envelope._src.cli.common import Progress, checked_output, status, warn
+    from drive_envelope._src.cli.common import Progress, checked_output, refuse_input_as_output, status, warn
     from drive_envelope._src.errors import EngineWarning, InputError
     from drive_envelope._src.scenario.chain import ChainScenario, load_stand
     from drive_envelope._src.scenario.trajectory import (
@@ -96,6 +96,7 @@ def _run(args: argparse.Namespace) -> int:
 
     to_stdout = args.output in (None, "-")
     output = None if to_stdout else checked_output(args.output)
+    refuse_input_as_output(output, args.file, "the scenario", "the trajectory")
     chosen = _output_format(args.format, output)  # before the run: a bad output wastes no simulation
     if output is not None:
         from drive_envelope._src.io.atomic import check_writable
