@@ -271,3 +271,15 @@ def test_a_full_standard_output_is_one_line_and_status_2(
         capsys.readouterr().err
         == "drive-envelope: error: cannot write to standard output: No space left on device\n"
     )
+
+
+def test_show_reads_a_datasheet_or_catalog_name(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """envelope show takes what plot and check take (a datasheet said "unknown key 'description'")."""
+    assert main(["envelope", "show", "tmotor-ak80-6"]) == 0
+    by_name = capsys.readouterr().out
+    sheet = tmp_path / "ak80.toml"
+    assert main(["catalog", "tmotor-ak80-6"]) == 0
+    sheet.write_text(capsys.readouterr().out, encoding="utf-8")
+    assert main(["envelope", "show", str(sheet)]) == 0
+    assert capsys.readouterr().out == by_name
+    assert by_name.startswith("T-Motor AK80-6 (revolute)") and "37.6991" in by_name

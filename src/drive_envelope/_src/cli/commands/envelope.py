@@ -13,7 +13,11 @@ def register(subparsers: Any) -> None:
     parser = subparsers.add_parser("envelope", help="inspect envelope files")
     actions = parser.add_subparsers(dest="envelope_command", metavar="ACTION")
     show = actions.add_parser("show", help="print an envelope file as a table with its corner points")
-    show.add_argument("file", metavar="FILE", help="envelope file (TOML or JSON)")
+    show.add_argument(
+        "file",
+        metavar="FILE|NAME",
+        help="envelope file (TOML, JSON or YAML), datasheet file or catalog name (its peak envelope)",
+    )
     add_format_argument(show, ("text", "json", "toml"), "the table, or the envelope file as JSON or TOML")
     show.set_defaults(func=_show)
     parser.set_defaults(func=lambda args: _usage(parser))
@@ -25,14 +29,11 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from drive_envelope._src.io.envelope_file import (
-        envelope_table,
-        envelope_to_json,
-        envelope_to_toml,
-        load_envelope,
-    )
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+    from drive_envelope._src.io.envelope_file import envelope_table, envelope_to_json, envelope_to_toml
 
-    envelope = load_envelope(args.file)
+    # as plot, check and simulate read an envelope: a datasheet said "unknown key 'description'"
+    envelope = resolve_envelope(args.file)
     if args.format == "json":
         print(envelope_to_json(envelope), end="")
     elif args.format == "toml":
