@@ -140,6 +140,16 @@ def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> Non
         (["check", "--bogus"], "drive-envelope check: error: the following arguments are required"),
         (["fit", "x.csv", "--seed", "x"], "argument --seed: expected an integer >= 0, got 'x'"),
         (["nope"], "drive-envelope: error: argument COMMAND: invalid choice: 'nope'"),
+        (  # was the top-level parser's: no suggestion, and `see drive-envelope --help`
+            ["check", "e.toml", "log.csv", "--tolerence", "0.1"],
+            "drive-envelope check: error: unrecognized arguments: --tolerence 0.1 (--tolerence: did you "
+            "mean --tolerance?) (see drive-envelope check --help)",
+        ),
+        (
+            ["mujoco", "show", "robot.xml", "--jsn"],
+            "drive-envelope mujoco show: error: unrecognized arguments: --jsn (--jsn: did you mean --json?)",
+        ),
+        (["derive", "a", "b"], "drive-envelope derive: error: unrecognized arguments: b (see drive-envelope"),
     ],
 )
 def test_bad_flags_are_one_line_with_exit_2(

@@ -106,10 +106,42 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout = original
 
 
+def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``parse_args`` whose unknown-flag error names the subcommand and the nearest flag.
+
+    argparse reports leftovers from the top-level parser (``drive-envelope: error: unrecognized
+    arguments: --tolerence 0.1 (see drive-envelope --help)``); the subcommand's parser knows the
+    flags to suggest and the help to point to.
+    """
+    import difflib
+
+    args, extra = parser.parse_known_args(argv)
+    if not extra:
+        return args
+    command = parser
+    for token in argv:  # the chain of subcommands named before the first unknown token
+        choices = next(
+            (a.choices for a in command._actions if isinstance(a, argparse._SubParsersAction)), None
+        )
+        if choices is None or token not in choices:
+            if token == extra[0]:
+                break
+            continue
+        command = choices[token]
+    flags = [flag for action in command._actions for flag in action.option_strings]
+    hints = []
+    for item in extra:
+        if item.startswith("--"):
+            close = difflib.get_close_matches(item.split("=", 1)[0], flags, n=1, cutoff=0.6)
+            hints += [f"{item.split('=', 1)[0]}: did you mean {close[0]}?"] if close else []
+    hint = f" ({'; '.join(hints)})" if hints else ""
+    command.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
+
+
 def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = _parse(parser, sys.argv[1:] if argv is None else list(argv))
     except SystemExit as exc:  # --help, --version, or a bad flag (one line, see Parser): its status
         return exc.code if isinstance(exc.code, int) else 2
     if getattr(args, "func", None) is None:
