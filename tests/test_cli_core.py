@@ -293,3 +293,17 @@ def test_show_reads_a_datasheet_or_catalog_name(tmp_path: Path, capsys: pytest.C
     assert main(["envelope", "show", str(sheet)]) == 0
     assert capsys.readouterr().out == by_name
     assert by_name.startswith("T-Motor AK80-6 (revolute)") and "37.6991" in by_name
+
+
+def test_a_scenario_for_an_envelope_and_back_is_named(capsys: pytest.CaptureFixture[str]) -> None:
+    """Name the kind of file given (the messages were "unknown key 'drive'" / "unknown key 'max_effort'")."""
+    root = Path(__file__).resolve().parents[1] / "examples"
+    scenario, envelope_file = root / "scenarios" / "actuator_swing.toml", root / "envelopes" / "demo.toml"
+    assert main(["check", str(scenario), str(scenario)]) == 2
+    assert f"{scenario}: a scenario or stand file (its [drive] table), not an envelope file" in (
+        capsys.readouterr().err
+    )
+    assert main(["simulate", str(envelope_file)]) == 2
+    assert f"{envelope_file}: an envelope file (max_effort at the top level), not a scenario or stand" in (
+        capsys.readouterr().err
+    )

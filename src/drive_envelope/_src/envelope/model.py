@@ -295,12 +295,23 @@ class PerformanceEnvelope:
 _KEYS = ("name", "joint", *ENVELOPE_FIELDS)
 
 
+_SCENARIO_TABLES = ("joint", "drive", "envelope", "load", "pendulum", "friction", "simulation", "servo")
+"""Tables of a scenario or stand file: one of them where an envelope goes is named as such."""
+
+
 def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> PerformanceEnvelope:
     """Build a :class:`PerformanceEnvelope` from a mapping; every error names ``source`` and the key."""
     if not isinstance(data, Mapping):
         raise InputError(f"{source}: expected a table of envelope keys, got {type(data).__name__}")
     for key in data:
         if key not in _KEYS:
+            if key in _SCENARIO_TABLES and isinstance(data[key], Mapping):
+                # a scenario or stand ([joint], [drive]...) named where an envelope goes: say so
+                raise InputError(
+                    f"{source}: a scenario or stand file (its [{key}] table), not an envelope file "
+                    "(max_effort, max_actuator_velocity, ... at the top level): give the envelope file, "
+                    "datasheet or catalog name its [envelope] table names"
+                )
             raise InputError(
                 f"{source}: unknown key {key!r}{nearest_key(str(key), _KEYS)}; valid keys: {', '.join(_KEYS)}"
             )

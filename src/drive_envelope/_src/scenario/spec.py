@@ -299,6 +299,13 @@ def scenario_from_mapping(
     Raises:
         InputError: one line naming ``source``, the key, the value and what was expected.
     """
+    if "joint" not in data or isinstance(data["joint"], str):
+        if any(key in data for key in ("max_effort", "max_actuator_velocity")):  # an envelope file
+            raise InputError(
+                f"{source}: an envelope file (max_effort at the top level), not a scenario or stand file "
+                "([joint], [drive], ... tables): a scenario names it in [envelope] datasheet = FILE, and "
+                "identify -o writes a stand"
+            )
     _check_keys(data, (*_TOP_KEYS, *other_tables), source, "")
     if "joint" not in data:
         raise InputError(f"{source}: missing required table [joint] (type, inertia)")
