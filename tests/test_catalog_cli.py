@@ -149,3 +149,12 @@ def test_mistakes_are_one_line_errors(
     assert code == 2 and fragment in err
     if "invalid choice" not in fragment:
         assert err.strip().count("\n") == 0
+
+
+def test_a_robot_map_name_is_named_as_a_map(capsys: pytest.CaptureFixture[str]) -> None:
+    """catalog/derive of a map's name suggested the nearest actuator ('unitree-go2-calf')."""
+    for argv in (["catalog", "unitree-go2"], ["derive", "unitree-go2"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "'unitree-go2' is a robot map, not an actuator: " in err and "unitree-go2.toml" in err
+        assert "--map unitree-go2" in err and "did you mean" not in err

@@ -181,6 +181,14 @@ def load_catalog_datasheet(name: str) -> Datasheet:
 def _key(name: str) -> str:
     key = catalog_entry(name)
     if key is None:
+        from drive_envelope._src.datasheet.maps import robot_maps
+
+        shipped = {robot.key: robot for robot in robot_maps()}
+        if name in shipped:  # a robot map's name got the nearest actuator's as a suggestion
+            raise InputError(
+                f"{name!r} is a robot map, not an actuator: {shipped[name].path} "
+                f"(`drive-envelope catalog --maps` lists them; usd and mujoco apply take --map {name})"
+            )
         keys = sorted(_files())
         match = difflib.get_close_matches(name, keys, n=1, cutoff=0.4)
         hint = f" (did you mean {match[0]!r}?)" if match else ""
