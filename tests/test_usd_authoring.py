@@ -230,6 +230,18 @@ def test_d6_axes_need_an_instance() -> None:
     assert read_envelope(stage, "/Robot/d6", instance="rotY").max_actuator_velocity == pytest.approx(math.pi)
 
 
+def test_a_d6_joint_without_an_instance_lists_its_driven_axes() -> None:
+    """Name the axes the D6 joint has drives on, so the map entry can say which one."""
+    from pxr import UsdPhysics
+
+    from drive_envelope.usd import write_envelope
+
+    stage = _stage()
+    UsdPhysics.DriveAPI.Apply(stage.GetPrimAtPath("/Robot/d6"), "rotY")
+    with pytest.raises(InputError, match=r"one of rotX, rotY, rotZ \(it has drives on rotY\)"):
+        write_envelope(stage, "/Robot/d6", ANGULAR)
+
+
 @pytest.mark.parametrize("axis", ["transX", "transY", "transZ"])
 def test_d6_translation_axis_is_refused(axis: str) -> None:
     """Refuse a D6 translation axis: PhysX never reads an envelope there (it was a warning only)."""

@@ -180,7 +180,11 @@ def _choose_instance(prim: Usd.Prim, kind: str, instance: str | None) -> str:
     allowed = {"revolute": ("angular",), "prismatic": ("linear",), "d6": _D6_INSTANCES}[kind]
     if instance is None:
         if kind == "d6":
-            raise InputError(f"{where}: a D6 joint needs an instance, one of rotX, rotY, rotZ")
+            from pxr import UsdPhysics
+
+            driven = [axis for axis in ("rotX", "rotY", "rotZ") if prim.HasAPI(UsdPhysics.DriveAPI, axis)]
+            hint = f" (it has drives on {', '.join(driven)})" if driven else ""
+            raise InputError(f"{where}: a D6 joint needs an instance, one of rotX, rotY, rotZ{hint}")
         return allowed[0]
     if instance not in allowed:
         raise InputError(
