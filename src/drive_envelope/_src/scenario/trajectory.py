@@ -317,7 +317,11 @@ def _cell(value: str | None, where: str) -> float:
 
 
 def _csv_columns(text: str, file: Path, required: tuple[str, ...]) -> dict[str, FloatArray]:
-    """The ``required`` columns of a CSV trajectory (the file format of simulate: SI, exact names)."""
+    """The ``required`` columns of a CSV trajectory (the file format of simulate: SI, exact names).
+
+    Not the log reader of ``analysis`` (names up to case, units in headers): that layer is above
+    this one, and this reads back only what :func:`write_trajectory_csv` writes.
+    """
     reader = csv.reader(io.StringIO(text))
     try:
         header = [name.strip() for name in next(reader, [])]
