@@ -260,3 +260,29 @@ def test_plot_reads_a_log_as_check_reads_it(
         ["plot", str(bench_envelope_file), "-t", str(bad), "-o", str(tmp_path / "x.png")], capsys
     )
     assert code == 2 and "column 'velocity' is ambiguous" in err
+
+
+def test_plot_takes_the_column_flags_its_errors_name(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The missing-column error names --velocity-column, which plot refused; a chain run's are named."""
+    pytest.importorskip("matplotlib")
+    log = write_log(tmp_path / "chain.csv", "time,hip.velocity,hip.effort\n0,0,1\n0.1,5,11\n0.2,20,9\n")
+    code, _, err = run_cli(
+        ["plot", str(bench_envelope_file), "-t", str(log), "-o", str(tmp_path / "a.png")], capsys
+    )
+    assert code == 2 and "--velocity-column and --effort-column" in err
+    columns = ["--velocity-column", "hip.velocity", "--effort-column", "hip.effort", "--time-column", "time"]
+    argv = [
+        "plot",
+        str(bench_envelope_file),
+        "-t",
+        str(log),
+        *columns,
+        "-o",
+        str(tmp_path / "a.png"),
+        "--json",
+    ]
+    code, out, err = run_cli(argv, capsys)
+    assert code == 0, err
+    assert json.loads(out)["trajectories"] == [{"file": str(log), "label": "chain", "samples": 3}]

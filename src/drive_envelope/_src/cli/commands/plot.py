@@ -39,6 +39,11 @@ def register(subparsers: Any) -> None:
         "with velocity and effort columns (time optional; units in headers as check reads them); repeat "
         "for several",
     )
+    # the log reader's error for a missing column names these flags: plot takes them, as check does
+    group = parser.add_argument_group("columns of a -t log (defaults: those of `drive-envelope simulate`)")
+    group.add_argument("--velocity-column", default="velocity", metavar="C", help="joint velocity")
+    group.add_argument("--effort-column", default="effort", metavar="C", help="total actuator effort")
+    group.add_argument("--time-column", default=None, metavar="C", help="time (default: 'time' if there)")
     add_output_argument(parser, "figure file: .png, .svg or .pdf", required=True, metavar="FIG")
     parser.add_argument(
         "--title",
@@ -67,7 +72,15 @@ def _run(args: argparse.Namespace) -> int:
     check_figure_path(output)
     envelope = envelope_from_argument(args.envelope)
     _check_plottable(envelope, args.envelope)
-    points = [_points(path) for path in args.trajectory]
+    from drive_envelope._src.analysis.log_model import LogColumns
+
+    columns = LogColumns(
+        velocity=args.velocity_column,
+        effort=args.effort_column,
+        time=args.time_column or "time",
+        require_time=args.time_column is not None,
+    )
+    points = [_points(path, columns) for path in args.trajectory]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         handle = plot_envelope(envelope, points=points or None, title=_title(args.title))
@@ -95,18 +108,20 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _points(path: str) -> Any:
+def _points(path: str, columns: Any) -> Any:
     """The operating points of ``path``: velocity, effort and time; position is not drawn.
 
     simulate's JSON and Parquet files carry the run's name and engine, which label the points; any
-    other log is read by check's reader (its columns, units in headers, cell rules).
+    other log, or one whose columns the flags name, is read by check's reader (its columns, units in
+    headers, cell rules).
     """
     from pathlib import Path
 
+    from drive_envelope._src.analysis.log_model import LogColumns
     from drive_envelope._src.plots.curve import OperatingPoints
     from drive_envelope._src.plots.figure import plain_text
 
-    if Path(path).suffix.lower() in (".json", ".parquet", ".pq"):
+    if Path(path).suffix.lower() in (".json", ".parquet", ".pq") and columns == LogColumns():
         from drive_envelope._src.scenario.trajectory import read_operating_log
 
         run = read_operating_log(path)
@@ -115,7 +130,7 @@ def _points(path: str) -> Any:
     else:
         from drive_envelope._src.analysis.logs import read_log
 
-        log = read_log(path)
+        log = read_log(path, columns)
         label, velocity, effort, time = Path(path).stem, log.velocity, log.effort, log.time
     # a name from a file is text, never mathtext
     return OperatingPoints(velocity=velocity, effort=effort, time=time, label=plain_text(label))
