@@ -286,3 +286,16 @@ def test_plot_takes_the_column_flags_its_errors_name(
     code, out, err = run_cli(argv, capsys)
     assert code == 0, err
     assert json.loads(out)["trajectories"] == [{"file": str(log), "label": "chain", "samples": 3}]
+
+
+def test_plot_refuses_a_log_of_several_joints(
+    tmp_path: Path, bench_envelope_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two joints' points were drawn as one series over one envelope; one joint's log still plots."""
+    pytest.importorskip("matplotlib")
+    log = write_log(tmp_path / "long.csv", "time,joint,velocity,effort\n0,a,0,1\n0,b,5,11\n0.1,a,1,2\n")
+    figure = str(tmp_path / "a.png")
+    code, _, err = run_cli(["plot", str(bench_envelope_file), "-t", str(log), "-o", figure], capsys)
+    assert code == 2 and "the log holds 2 joints (a, b); plot draws one joint over one envelope" in err
+    one = write_log(tmp_path / "one.csv", "time,joint,velocity,effort\n0,a,0,1\n0.1,a,1,2\n")
+    assert run_cli(["plot", str(bench_envelope_file), "-t", str(one), "-o", figure], capsys)[0] == 0

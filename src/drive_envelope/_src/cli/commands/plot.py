@@ -131,6 +131,14 @@ def _points(path: str, columns: Any) -> Any:
         from drive_envelope._src.analysis.logs import read_log
 
         log = read_log(path, columns)
+        if log.joint is not None and len(log.names) > 1:  # their points were drawn as one series
+            from drive_envelope._src.errors import InputError
+
+            raise InputError(
+                f"{path}: the log holds {len(log.names)} joints ({', '.join(log.names[:3])}"
+                f"{', ...' if len(log.names) > 3 else ''}); plot draws one joint over one envelope: "
+                "`drive-envelope check MAPPING LOG --plot FIG` draws each joint over its own"
+            )
         label, velocity, effort, time = Path(path).stem, log.velocity, log.effort, log.time
     # a name from a file is text, never mathtext
     return OperatingPoints(velocity=velocity, effort=effort, time=time, label=plain_text(label))
