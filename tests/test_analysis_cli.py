@@ -163,6 +163,10 @@ def test_fit_from_curve_with_fixed_speed_limit(tmp_path: Path, capsys: pytest.Ca
         (["--fix", "max_effort"], "expected NAME=VALUE"),
         (["--fix", "max_effort=3 rpm"], "--fix max_effort"),
         (["--fix", "max_effort=3", "--fix", "max_effort=4"], "--fix 'max_effort' given twice"),
+        (  # float('1e400') was inf: a speed limit silently fixed at inf
+            ["--fix", "max_actuator_velocity=1e400"],
+            "--fix max_actuator_velocity: '1e400' is beyond the float range",
+        ),
         (["--outlier-quantile", "0.9"], "outlier-quantile"),
         (["--frontier-band", "0"], "--frontier-band: expected a fraction in (0, 1], got '0'"),
         (["--frontier-band", "1.5"], "--frontier-band: expected a fraction in (0, 1], got '1.5'"),

@@ -129,18 +129,9 @@ def _fixed(items: list[str], joint: str) -> dict[str, float]:
             )
         if name in fixed:  # the last would win silently: refused, as derive's --set
             raise InputError(f"--fix {name!r} given twice; give each parameter once")
-        text = value.strip()
-        number: object = float(text) if _is_number(text) else text
-        fixed[name] = read_quantity(number, si_unit(name, joint), f"--fix {name}")
+        # the text itself, as derive's --set: float('1e400') was inf, a speed limit fixed at inf
+        fixed[name] = read_quantity(value.strip(), si_unit(name, joint), f"--fix {name}")
     return fixed
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return text.lower() not in ("inf", "+inf", "infinity", "nan")
 
 
 def _run(args: argparse.Namespace) -> int:
