@@ -17,14 +17,17 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
+import sys
 import time
-from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import drive_envelope as de
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_kernels import median_times
 
 DT = 0.005
 """Time step [s]."""
@@ -80,18 +83,6 @@ def _arrays(n: int, dtype: Any) -> list[np.ndarray]:
     return [a.astype(dtype) for a in args]
 
 
-def _medians(fns: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
-    times: dict[str, list[float]] = {name: [] for name in fns}
-    for round_index in range(repeats + 1):
-        order = list(fns.items())
-        for name, fn in order if round_index % 2 else order[::-1]:
-            start = time.thread_time()
-            fn()
-            if round_index:  # round 0 warms up
-                times[name].append(time.thread_time() - start)
-    return {name: statistics.median(values) for name, values in times.items()}
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=1_000_000)
@@ -114,7 +105,7 @@ def main() -> None:
             "torch port (eager)": lambda t=tensors, k=kind: torch_clamp(*t, dtype=k),
             "array API on torch": lambda t=tensors: xp_clamp(torch, *t),
         }
-        medians = _medians(fns, args.repeats)
+        medians = dict(median_times(fns, args.repeats, clock=time.thread_time))
         print(f"\n{np.dtype(dtype).name}, N = {args.n:,}, thread CPU time, median of {args.repeats}:")
         for name, seconds in medians.items():
             print(f"  {name:<22} {seconds * 1e3:8.2f} ms")

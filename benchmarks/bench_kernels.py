@@ -61,9 +61,14 @@ def machine() -> str:
 
 
 def median_times(
-    fns: dict[str, Callable[[], Any]], repeats: int, sync: Callable[[], None] = lambda: None
+    fns: dict[str, Callable[[], Any]],
+    repeats: int,
+    sync: Callable[[], None] = lambda: None,
+    clock: Callable[[], float] = time.perf_counter,
 ) -> list[tuple[str, float]]:
-    """Median wall time [s] of each function over ``repeats`` rounds, after one warm-up round.
+    """Median time [s] of each function over ``repeats`` rounds, after one warm-up round.
+
+    ``clock`` is wall time by default; ``time.thread_time`` where other jobs share the machine.
 
     The functions run interleaved (one of each per round, the order reversed every other round),
     so a load change on a shared machine hits all of them alike and their ratios stay meaningful.
@@ -74,11 +79,11 @@ def median_times(
         # runs before a function changes its cache state: up to 15% at N = 1e6)
         order = list(fns.items())
         for name, fn in order if round_index % 2 else order[::-1]:
-            start = time.perf_counter()
+            start = clock()
             fn()
             sync()
             if round_index:
-                times[name].append(time.perf_counter() - start)
+                times[name].append(clock() - start)
     return [(name, statistics.median(values)) for name, values in times.items()]
 
 

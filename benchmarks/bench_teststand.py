@@ -21,9 +21,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib.util
-import os
-import platform
-import statistics
 import sys
 import time
 from collections.abc import Callable
@@ -36,31 +33,10 @@ from drive_envelope._src.scenario.spec import Scenario, load_scenario
 from drive_envelope._src.teststand.engines import reference
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_kernels import machine, median_times  # noqa: E402  (the benchmarks' shared helpers)
+
 SCENARIOS = ("step_response_pgs.toml", "step_response_tgs.toml")
-
-
-def machine() -> str:
-    """One line describing the CPU, the core count and the NumPy version."""
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}"
-
-
-def median_times(fns: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
-    """Median thread CPU time [s] of each function over ``repeats`` rounds, after one warm-up round."""
-    times: dict[str, list[float]] = {name: [] for name in fns}
-    for round_index in range(repeats + 1):
-        order = list(fns.items())
-        for name, fn in order if round_index % 2 else order[::-1]:
-            start = time.thread_time()
-            fn()
-            if round_index:  # round 0 warms caches and imports
-                times[name].append(time.thread_time() - start)
-    return {name: statistics.median(values) for name, values in times.items()}
 
 
 def load_baseline(path: str) -> Callable[[Scenario], Any]:
@@ -96,7 +72,7 @@ def main() -> None:
                 float(np.max(np.abs(getattr(ours, c) - getattr(theirs, c))))
                 for c in ("position", "velocity", "effort")
             )
-        medians = median_times(fns, args.repeats)
+        medians = dict(median_times(fns, args.repeats, clock=time.thread_time))
         sim = scenario.simulation
         ours_s = medians["reference"]
         line = (
