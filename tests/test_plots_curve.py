@@ -112,6 +112,15 @@ def test_windows_matplotlib_cannot_draw_are_refused(envelope: PerformanceEnvelop
         envelope_curve(envelope)
 
 
+def test_unlimited_max_effort_is_drawn_where_the_speed_line_bounds_it() -> None:
+    """max_effort = inf with a speed line: the region is the line's diamond (stall 3/0.1 = 30 N*m)."""
+    bounded = PerformanceEnvelope(max_effort=math.inf, max_actuator_velocity=3.0, speed_effort_gradient=0.1)
+    curve = envelope_curve(bounded)  # it was refused: "the effort axis would span +-inf"
+    np.testing.assert_allclose(curve.boundary, [[3.0, 0.0], [0.0, 30.0], [-3.0, 0.0], [0.0, -30.0]])
+    with pytest.raises(InputError, match="unbounded in effort"):  # no line limits the effort
+        envelope_curve(PerformanceEnvelope(max_effort=math.inf, max_actuator_velocity=3.0))
+
+
 def test_boundary_lines_are_clipped_to_the_window() -> None:
     """End each line at the window; a line entirely outside it (v_max = 1.7e308) has NaN ends."""
     far = PerformanceEnvelope(

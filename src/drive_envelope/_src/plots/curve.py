@@ -159,9 +159,14 @@ def envelope_curve(
     velocity_unit = si_unit("max_actuator_velocity", envelope.joint)
     effort_unit = si_unit("max_effort", envelope.joint)
     no_load = envelope.no_load_velocity()
+    if effort_extent is None and math.isinf(envelope.stall_effort()):
+        raise InputError(
+            "cannot plot: the envelope is unbounded in effort (max_effort = inf and speed_effort_gradient "
+            "= 0: no line limits the effort); give a finite max_effort, or pass effort_extent [N*m or N]"
+        )
     with np.errstate(over="ignore"):  # 1.15 x a value near the float limit: inf, refused below
         default_v = no_load * _MARGIN if math.isfinite(no_load) else 1.0
-        default_e = max(envelope.stall_effort(), envelope.max_effort) * _MARGIN
+        default_e = max(envelope.stall_effort(), _finite(envelope.max_effort)) * _MARGIN
     v_ext = _plottable(_extent(velocity_extent, default_v, "velocity_extent"), "velocity", velocity_unit)
     e_ext = _plottable(_extent(effort_extent, default_e, "effort_extent"), "effort", effort_unit)
     cut = min(v_ext, no_load)
@@ -211,9 +216,15 @@ def _plottable(extent: float, axis: str, unit: str) -> float:
     )
 
 
+def _finite(value: float) -> float:
+    """``value``, or 0 where it is infinite (a limit that is not there sets no scale)."""
+    return value if math.isfinite(value) else 0.0
+
+
 def _region(envelope: PerformanceEnvelope, cut: float, e_ext: float) -> FloatArray:
     """The feasible polygon, computed on unit scales so tiny or huge envelopes keep every corner."""
-    e_scale = max(envelope.stall_effort(), envelope.max_effort, 0.0) or e_ext
+    # max_effort = inf with a speed line: the line bounds the effort (the stall) and scales it
+    e_scale = max(envelope.stall_effort(), _finite(envelope.max_effort), 0.0) or e_ext
     with np.errstate(over="ignore", under="ignore"):
         unit = {
             "max_effort": envelope.max_effort / e_scale,
@@ -221,7 +232,8 @@ def _region(envelope: PerformanceEnvelope, cut: float, e_ext: float) -> FloatArr
             "velocity_dependent_resistance": envelope.velocity_dependent_resistance * (cut / e_scale),
             "speed_effort_gradient": envelope.speed_effort_gradient * (e_scale / cut),
         }
-    if not all(math.isfinite(value) for key, value in unit.items() if key != "max_actuator_velocity"):
+    limits = ("max_effort", "max_actuator_velocity")  # inf: no limit, scaled or not
+    if not all(math.isfinite(value) for key, value in unit.items() if key not in limits):
         return envelope.boundary(velocity_extent=cut)  # a scale beyond float range: draw it unscaled
     scaled = PerformanceEnvelope(
         max_effort=unit["max_effort"],
