@@ -152,6 +152,16 @@ def test_unbounded_needs_extent() -> None:
     assert env.boundary(velocity_extent=3.0).max(axis=0) == pytest.approx([3.0, 2.0])
 
 
+def test_unbounded_in_effort_has_no_polygon() -> None:
+    """max_effort = inf without a speed-effort slope: refused (it returned the point [[3, 0]])."""
+    env = PerformanceEnvelope(max_effort=math.inf, max_actuator_velocity=3.0)
+    for call in (env.boundary, env.corners, env.quadrant_path):
+        with pytest.raises(InputError, match="unbounded in effort"):
+            call()
+    sloped = PerformanceEnvelope(max_effort=math.inf, max_actuator_velocity=3.0, speed_effort_gradient=0.1)
+    assert sloped.boundary().max(axis=0) == pytest.approx([3.0, 30.0])  # the speed line bounds it
+
+
 def test_infinite_speed_with_resistance_is_bounded() -> None:
     """Bound the region by max_effort / R when max_actuator_velocity is inf."""
     env = PerformanceEnvelope(max_effort=6.0, velocity_dependent_resistance=2.0)

@@ -238,12 +238,17 @@ class PerformanceEnvelope:
         Returns:
             Array ``(K, 2)`` of ``(velocity, effort)`` vertices, ``K`` in 2..3.
         """
-        v0 = self.no_load_velocity()
+        v0, stall = self.no_load_velocity(), self.stall_effort()
+        if math.isinf(stall):  # a point [[v0, 0]] would pass for a polygon
+            raise InputError(
+                "the envelope is unbounded in effort (max_effort = inf and speed_effort_gradient = 0): "
+                "it has no boundary polygon"
+            )
         if math.isinf(v0):
             if velocity_extent is None or not velocity_extent > 0:
                 raise InputError("the envelope is unbounded in velocity: pass velocity_extent > 0")
             v0 = float(velocity_extent)
-        return _clip_quadrant(self, v0, self.stall_effort())
+        return _clip_quadrant(self, v0, stall)
 
     def boundary(self, *, velocity_extent: float | None = None) -> FloatArray:
         """Polygon of the feasible region in the (velocity, effort) plane, all four quadrants.
