@@ -156,6 +156,41 @@ def test_rollout_threads_match_sequential_steps(mujoco: Any) -> None:
             assert drive_state(model, data, drive) == (velocity[b, k], effort[b, k])
 
 
+def test_rollout_outputs_of_another_layout_are_refused(mujoco: Any) -> None:
+    """A state that is not mjSTATE_FULLPHYSICS, the two outputs swapped, or unequal nstep: one line each.
+
+    Each was read at the wrong offsets before: an mjSTATE_PHYSICS state (no time) gave another
+    slot as the velocity, a silently wrong number.
+    """
+    from mujoco import rollout
+
+    from drive_envelope.mujoco import add_drive, rollout_operating_points
+
+    spec = mujoco.MjSpec.from_string(ARM)
+    drive = add_drive(spec, "elbow", envelope=_env(), stiffness=60, damping=1)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    nstate = mujoco.mj_stateSize(model, full)
+    state0 = np.zeros(nstate)
+    mujoco.mj_getState(model, data, state0, full)
+    state, sensordata = rollout.rollout(model, data, state0[None], np.full((1, 20, 1), 1.0))
+    velocity, _ = rollout_operating_points(model, drive, state, sensordata)
+    assert velocity.shape == (1, 20)
+    physics = state[..., 1:]  # the mjSTATE_PHYSICS layout: FULLPHYSICS without the time
+    with pytest.raises(
+        InputError,
+        match=rf"argument 'state' has shape \(1, 20, {nstate - 1}\); expected \(\.\.\., nstep, {nstate}\)",
+    ):
+        rollout_operating_points(model, drive, physics, sensordata)
+    with pytest.raises(InputError, match=r"argument 'state' has shape \(1, 20, 1\)"):
+        rollout_operating_points(model, drive, sensordata, state)
+    with pytest.raises(InputError, match=r"argument 'sensordata' has shape \(1, 20, 2\)"):
+        rollout_operating_points(model, drive, state, np.zeros((1, 20, 2)))
+    with pytest.raises(InputError, match=r"differ in their leading \(\.\.\., nstep\) shape"):
+        rollout_operating_points(model, drive, state[:, :10], sensordata)
+
+
 def test_public_module_imports_no_engine() -> None:
     """Import drive_envelope.mujoco without importing mujoco itself."""
     code = "import sys, drive_envelope.mujoco; print('mujoco' in sys.modules)"
@@ -367,7 +402,7 @@ def test_a_handle_of_another_model_is_refused(mujoco: Any) -> None:
     with pytest.raises(InputError, match=r"MjDrive 'sm' .* its drives: 'ps', 'el'"):
         drive_state(model, mujoco.MjData(model), slider)
     # rollouts find the effort sensor from any reference
-    states = np.zeros((1, 3, 1 + other.nq + other.nv))
+    states = np.zeros((1, 3, mujoco.mj_stateSize(other, mujoco.mjtState.mjSTATE_FULLPHYSICS)))
     sensors = np.arange(3.0).reshape(1, 3, 1)
     velocity, effort = rollout_operating_points(other, "slider", states, sensors)
     assert effort.tolist() == [[0.0, 1.0, 2.0]] and velocity.shape == (1, 3)

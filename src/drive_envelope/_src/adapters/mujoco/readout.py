@@ -82,12 +82,38 @@ def rollout_operating_points(
     Returns:
         ``(velocity, effort)`` arrays of shape ``(..., nstep)``: the velocity after each step
         [rad/s or m/s] and that step's total actuator effort [N*m or N].
+
+    Raises:
+        InputError: ``drive`` names no drive with an ``actuatorfrc`` sensor; ``state`` is not
+            this model's ``mjSTATE_FULLPHYSICS`` layout or ``sensordata`` not its sensor data
+            (the two swapped, say); or their leading ``(..., nstep)`` shapes differ.
     """
+    import mujoco
+
     info = find_drive(model, drive, "rollout_operating_points", argument="drive")
     sensor = _effort_sensor(model, drive, info)
     dof, _ = _ids(model, info)
     states = np.asarray(state, dtype=np.float64)
     sensors = np.asarray(sensordata, dtype=np.float64)
+    # a state of another layout (mjSTATE_PHYSICS has no time) or the two arrays swapped would be
+    # read at the wrong offsets: wrong numbers, not an error
+    where = "rollout_operating_points"
+    nstate = int(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    if states.ndim == 0 or states.shape[-1] != nstate:
+        raise InputError(
+            f"{where}: argument 'state' has shape {states.shape}; expected (..., nstep, {nstate}): "
+            "mjSTATE_FULLPHYSICS states of this model, as mujoco.rollout.rollout returns them"
+        )
+    if sensors.ndim == 0 or sensors.shape[-1] != model.nsensordata:
+        raise InputError(
+            f"{where}: argument 'sensordata' has shape {sensors.shape}; expected (..., nstep, "
+            f"{model.nsensordata}): this model's sensor data, as mujoco.rollout.rollout returns it"
+        )
+    if states.shape[:-1] != sensors.shape[:-1]:
+        raise InputError(
+            f"{where}: 'state' {states.shape} and 'sensordata' {sensors.shape} differ in their "
+            "leading (..., nstep) shape; expected the two outputs of one rollout"
+        )
     # mjSTATE_FULLPHYSICS starts with time, qpos, qvel
     velocity = states[..., 1 + model.nq + dof]
     effort = sensors[..., int(model.sensor_adr[sensor])]
