@@ -77,6 +77,28 @@ def test_out_buffer_is_reused() -> None:
     np.testing.assert_array_equal(effort.numpy(), [1.0, -2.0, 0.5])
 
 
+def test_an_out_that_is_not_a_warp_array_is_refused() -> None:
+    """A NumPy array or a torch tensor as ``out`` is one line: it was uploaded, the copy written.
+
+    The caller's array kept its old values while the result went to a new Warp array: a
+    silently unwritten buffer.
+    """
+    import drive_envelope.warp as dw
+
+    params = dw.EnvelopeArrays.from_values(max_effort=[1.0, 2.0, 3.0])
+    buffer = np.full(3, -7.0, dtype=np.float32)
+    with pytest.raises(
+        InputError,
+        match=r"out: expected a float32 Warp array of shape \(3,\) to write into, got a numpy.ndarray",
+    ):
+        dw.clamp_effort(params, [5.0, -5.0, 0.5], 0.0, out=buffer)
+    with pytest.raises(InputError, match=r"got a numpy.ndarray"):
+        dw.effort_limit(params, 0.0, out=buffer)
+    with pytest.raises(InputError, match=r"got a numpy.ndarray"):
+        dw.clamp_effort_implicit(params, [5.0, -5.0, 0.5], 0.0, 20.0, 0.01, out=buffer)
+    np.testing.assert_array_equal(buffer, [-7.0, -7.0, -7.0])
+
+
 def test_bad_input_raises_input_error() -> None:
     """Reject float64, an infinite cap and arrays of mixed shapes with InputError.
 

@@ -188,6 +188,13 @@ def _output(out: Any, count: int, device: Any) -> Any:
     if out is None:
         wp = _warp()
         return wp.empty(count, dtype=wp.float32, device=device)
+    if not _is_warp_array(out):
+        # uploading it, as inputs are, would write the result into a copy: the caller's array
+        # would keep its old values
+        raise InputError(
+            f"out: expected a float32 Warp array of shape ({count},) to write into, got a "
+            f"{type(out).__module__}.{type(out).__name__}; pass a wp.array, or no out and use the result"
+        )
     return _as_array(out, count, device, "out")
 
 
