@@ -358,6 +358,51 @@ def _driven_arm(mujoco: Any) -> tuple[Any, Any, tuple[Any, ...]]:
     return spec, spec.compile(), drives
 
 
+def test_set_targets_reads_units_and_refuses_what_mujoco_would_zero(mujoco: Any) -> None:
+    """Strings with units are read in the joint's SI unit; NaN, inf, arrays and bools are one line.
+
+    A NaN or inf control was written as given: MuJoCo then warns once and zeroes every control of
+    the model (the robot drives every joint to 0 with full effort). A refused call writes nothing.
+    """
+    from drive_envelope.mujoco import add_drive
+
+    spec = mujoco.MjSpec.from_string(ARM)
+    elbow = add_drive(spec, "elbow", envelope=_env(), stiffness=60, damping=1, inputs="pos vel ff")
+    slider = add_drive(
+        spec, "slider", envelope=_env(joint="prismatic"), stiffness=60, damping=1, inputs="pos vel"
+    )
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    elbow.set_targets(model, data, position="90 deg", velocity="60 rpm", effort="500 mNm")
+    slider.set_targets(model, data, position="25 mm", velocity=np.float32(0.5))
+    pos, vel, ff = (elbow.control_index(model, name) for name in ("pos", "vel", "ff"))
+    assert data.ctrl[pos] == pytest.approx(np.pi / 2) and data.ctrl[vel] == pytest.approx(2 * np.pi)
+    assert data.ctrl[ff] == pytest.approx(0.5)
+    assert data.ctrl[slider.control_index(model, "pos")] == pytest.approx(0.025)
+    assert data.ctrl[slider.control_index(model, "vel")] == 0.5
+    before = data.ctrl.copy()
+    for kwargs, message in [
+        ({"position": float("nan")}, r"argument 'position' = nan: expected a finite target \[rad\]"),
+        ({"velocity": np.inf}, r"argument 'velocity' = inf: expected a finite target \[rad/s\]"),
+        ({"position": 1.0, "effort": [1.0, 2.0]}, r"argument 'effort': expected a number \[N\*m\]"),
+        ({"position": True}, r"argument 'position': expected a number \[rad\]"),
+        ({"position": "2 m"}, r"argument 'position': '2 m' is not"),
+    ]:
+        with pytest.raises(InputError, match=message) as error:
+            elbow.set_targets(model, data, **kwargs)
+        assert "\n" not in str(error.value) and str(error.value).startswith("drive 'elbow': set_targets:")
+    with pytest.raises(InputError, match=r"argument 'position': '1 rad' is not"):
+        slider.set_targets(model, data, position="1 rad")
+    np.testing.assert_array_equal(data.ctrl, before)
+    other = mujoco.MjSpec.from_string(ARM)
+    add_drive(other, "shoulder", envelope=_env(), stiffness=60, damping=1)
+    other_model = other.compile()
+    with pytest.raises(
+        InputError, match=r"drive 'elbow': the model has no actuator 'elbow'; expected the model compiled"
+    ):
+        elbow.set_targets(other_model, mujoco.MjData(other_model), position=0.0)
+
+
 def test_drive_state_takes_every_kind_of_drive_reference(mujoco: Any) -> None:
     """MjDriveInfo from model_drives, MjDrive, actuator name, index (numpy too) and joint name agree."""
     from drive_envelope.mujoco import drive_state, get_envelope, get_gains, model_drives

@@ -6,15 +6,25 @@ without importing the spec helpers.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.values import read_quantity
 
 if TYPE_CHECKING:
     import mujoco
+
+_TARGETS = {
+    "pos": ("position", "rad", "m"),
+    "vel": ("velocity", "rad/s", "m/s"),
+    "ff": ("effort", "N*m", "N"),
+}
+"""Input -> (``set_targets`` argument, revolute SI unit, prismatic SI unit)."""
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -57,7 +67,29 @@ class MjDrive:
         import mujoco
 
         actuator = self.actuators[self.inputs.index(name)]
-        return int(model.actuator_ctrladr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)])
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
+        if index < 0:  # -1 would index the model's last control
+            raise InputError(
+                f"drive {self.name!r}: the model has no actuator {actuator!r}; "
+                "expected the model compiled from the spec add_drive was given"
+            )
+        return int(model.actuator_ctrladr[index])
+
+    def _target(self, name: str, value: object) -> float:
+        """One control value in SI: a finite real number, or a string with units ("90 deg")."""
+        argument, revolute, prismatic = _TARGETS[name]
+        unit = revolute if self.envelope.joint == "revolute" else prismatic
+        where = f"drive {self.name!r}: set_targets: argument {argument!r}"
+        if isinstance(value, str):
+            number = read_quantity(value, unit, where)
+        elif isinstance(value, numbers.Real) and not isinstance(value, bool):
+            number = float(value)
+        else:
+            raise InputError(f"{where}: expected a number [{unit}] or a string with units, got {value!r}")
+        # MuJoCo would take a NaN or inf control, warn once and zero every control of the model
+        if not math.isfinite(number):
+            raise InputError(f"{where} = {value!r}: expected a finite target [{unit}]")
+        return number
 
     def set_targets(
         self,
@@ -76,7 +108,17 @@ class MjDrive:
             position: Target position [rad or m] (input ``pos``).
             velocity: Target velocity [rad/s or m/s] (input ``vel``).
             effort: Feed-forward effort [N*m or N] (input ``ff``), counted as actuator effort.
+
+        Each is a real number in SI or a string with units (``"90 deg"``, ``"300 rpm"``).
+
+        Raises:
+            InputError: the drive has no such input, a value that is not a finite number (or
+                a string with a unit of the right dimension), or a model without the drive.
         """
-        for name, value in (("pos", position), ("vel", velocity), ("ff", effort)):
-            if value is not None:
-                data.ctrl[self.control_index(model, name)] = value
+        writes = [
+            (self.control_index(model, name), self._target(name, value))
+            for name, value in (("pos", position), ("vel", velocity), ("ff", effort))
+            if value is not None
+        ]
+        for index, value in writes:  # all checked first: a refused call writes nothing
+            data.ctrl[index] = value
