@@ -256,6 +256,45 @@ def test_set_envelope_and_set_gains_refuse_bad_input(mujoco: Any) -> None:
     assert get_gains(model, "drive") == (10.0, 3.0)
 
 
+def test_set_gains_reads_units_as_add_drive_does(mujoco: Any) -> None:
+    """Strings with units, as add_drive takes them, in the drive type's unit; other types one line.
+
+    ``set_gains(model, "a", stiffness="60 N*m/deg")`` was float()'s bare ValueError; a list was a
+    TypeError. A refused call changes neither gain.
+    """
+    from drive_envelope.mujoco import get_gains, set_gains
+
+    actuators = (
+        '<plugin name="drive" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+        '<plugin name="accel" joint="b" dynprm="10 -1 0 0 10 1" instance="acc"/>'
+    )
+    xml = TWIN.format(actuators=actuators).replace(
+        "<actuator>",
+        '<extension><plugin plugin="drive_envelope.envelope"><instance name="acc">'
+        '<config key="drive_type" value="acceleration"/></instance></plugin></extension><actuator>',
+    )
+    model = mujoco.MjModel.from_xml_string(xml)
+    set_gains(model, "drive", stiffness="60 N*m/deg", damping=np.float32(2.0))
+    assert get_gains(model, "drive") == (pytest.approx(60 * 180 / np.pi), 2.0)
+    set_gains(model, "accel", stiffness="400 1/s^2", damping="20 1/s")
+    assert get_gains(model, "accel") == (400.0, 20.0)
+    for kwargs, message in [
+        (
+            {"stiffness": "60 N*m", "damping": 1.0},
+            r"argument 'stiffness': '60 N\*m' has no matching angle unit",
+        ),
+        ({"damping": [1.0]}, r"argument 'damping': expected a number \[N\*m\*s/rad\] or a string with units"),
+        ({"stiffness": True}, r"argument 'stiffness': expected a number"),
+        ({"stiffness": 1.0, "damping": "-3 N*m*s/rad"}, r"damping = -3\.0: expected a number in \[0, 1e12\]"),
+    ]:
+        with pytest.raises(InputError, match=message) as error:
+            set_gains(model, "drive", **kwargs)
+        assert "\n" not in str(error.value)
+    assert get_gains(model, "drive") == (pytest.approx(60 * 180 / np.pi), 2.0)
+    with pytest.raises(InputError, match=r"argument 'stiffness': '1 N\*m/rad' is not"):
+        set_gains(model, "accel", stiffness="1 N*m/rad")
+
+
 def test_solver_stats_report_the_solve_and_the_plugin_has_no_state(mujoco: Any) -> None:
     """The solve's iterations and drive solves of the last step; none of it is MuJoCo state."""
     from drive_envelope.mujoco import solver_stats

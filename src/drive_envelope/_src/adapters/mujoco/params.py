@@ -31,6 +31,7 @@ from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
+from drive_envelope._src.values import read_quantity
 
 if TYPE_CHECKING:
     import mujoco
@@ -329,31 +330,52 @@ def set_gains(
     model: mujoco.MjModel,
     actuator: DriveRef,
     *,
-    stiffness: float | None = None,
-    damping: float | None = None,
+    stiffness: float | str | None = None,
+    damping: float | str | None = None,
 ) -> None:
     """Change a drive's gains; None keeps a gain. Takes effect at the next ``mj_step``.
 
     Args:
         model: The compiled model.
         actuator: The drive: see :func:`find_drive`.
-        stiffness: Drive stiffness, SI [N*m/rad or N/m] (force) or [1/s^2] (acceleration).
-        damping: Drive damping, SI [N*m*s/rad or N*s/m] (force) or [1/s] (acceleration).
+        stiffness: Drive stiffness, SI number or string with units, as ``add_drive`` takes it
+            ([N*m/rad or N/m] (force) or [1/s^2] (acceleration)).
+        damping: Drive damping, SI number or string with units ([N*m*s/rad or N*s/m] (force) or
+            [1/s] (acceleration)).
 
     Raises:
-        InputError: no such drive, or a gain outside ``[0, 1e12]``.
+        InputError: no such drive, a gain that is not a number or a string of the right unit, or
+            one outside ``[0, 1e12]``; a refused call changes neither gain.
     """
     where = f"set_gains(actuator={drive_label(actuator)})"
     info = find_drive(model, actuator, "set_gains")
-    units = ("N*m/rad", "N*m*s/rad") if _joint_kind(model, info) == "revolute" else ("N/m", "N*s/m")
-    if stiffness is not None:
-        model.actuator_dynprm[info.actuator, 4] = _checked(
-            stiffness, "stiffness", units[0], where, unlimited=False
+    if info.drive_type == "acceleration":
+        units = ("1/s**2", "1/s")
+    elif _joint_kind(model, info) == "revolute":
+        units = ("N*m/rad", "N*m*s/rad")
+    else:
+        units = ("N/m", "N*s/m")
+    slots = {
+        slot: _checked(_gain(value, label, unit, where), label, unit, where, unlimited=False)
+        for slot, label, value, unit in (
+            (4, "stiffness", stiffness, units[0]),
+            (5, "damping", damping, units[1]),
         )
-    if damping is not None:
-        model.actuator_dynprm[info.actuator, 5] = _checked(
-            damping, "damping", units[1], where, unlimited=False
-        )
+        if value is not None
+    }
+    for slot, number in slots.items():  # both checked first
+        model.actuator_dynprm[info.actuator, slot] = number
+
+
+def _gain(value: object, label: str, unit: str, where: str) -> float:
+    """A gain given to :func:`set_gains` in SI: a real number, or a string read with its units."""
+    if isinstance(value, str):
+        return read_quantity(value, unit, f"{where}: argument {label!r}")
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return float(value)
+    raise InputError(
+        f"{where}: argument {label!r}: expected a number [{unit}] or a string with units, got {value!r}"
+    )
 
 
 def get_envelope(model: mujoco.MjModel, actuator: DriveRef) -> PerformanceEnvelope:
