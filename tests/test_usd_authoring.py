@@ -313,6 +313,30 @@ def test_bad_targets_raise_one_line(
     assert "\n" not in str(info.value)
 
 
+def test_write_takes_a_source_as_set_envelope_does_and_names_anything_else() -> None:
+    """A catalog name (or file) is resolved like mujoco.set_envelope's; a dict or None is one line.
+
+    Both were ``AttributeError: 'dict' object has no attribute 'joint'`` before.
+    """
+    from drive_envelope.datasheet import resolve_envelope
+    from drive_envelope.usd import read_envelope, write_envelope
+
+    by_name, by_value = _stage(), _stage()
+    assert write_envelope(by_name, "/Robot/hinge", "tmotor-ak80-6") == "angular"
+    write_envelope(by_value, "/Robot/hinge", resolve_envelope("tmotor-ak80-6"))
+    assert read_envelope(by_name, "/Robot/hinge") == read_envelope(by_value, "/Robot/hinge")
+    for bad in ({"max_effort": 3.0}, None):
+        with pytest.raises(
+            InputError, match=r"write_envelope: argument 'envelope': expected an envelope"
+        ) as info:
+            write_envelope(_stage(), "/Robot/hinge", bad)  # type: ignore[arg-type]
+        assert "\n" not in str(info.value)
+    with pytest.raises(InputError, match=r"'tmotor-ak80-7': no such file or catalog actuator \(did you mean"):
+        write_envelope(_stage(), "/Robot/hinge", "tmotor-ak80-7")
+    with pytest.raises(InputError, match="envelope is for a prismatic joint"):
+        write_envelope(_stage(), "/Robot/hinge", "actuonix-l16-35-6-r")
+
+
 def test_read_without_api_raises() -> None:
     """Refuse to read an envelope that was never applied."""
     from drive_envelope.usd import read_envelope

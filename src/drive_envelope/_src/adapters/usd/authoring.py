@@ -218,7 +218,7 @@ def _check_d6_axis(prim: Usd.Prim, inst: str, where: str) -> None:
 def write_envelope(
     prim_or_stage: Any,
     joint_path: str | None,
-    envelope: PerformanceEnvelope,
+    envelope: PerformanceEnvelope | str,
     instance: str | None = None,
 ) -> str:
     """Author ``envelope`` on a joint's drive the way PhysX reads it.
@@ -236,7 +236,9 @@ def write_envelope(
         prim_or_stage: A ``Usd.Stage``, or a ``Usd.Prim`` (the joint itself when ``joint_path`` is
             None, else the base of a relative ``joint_path``).
         joint_path: Prim path of the joint, or None.
-        envelope: The envelope (joint side, SI); its ``joint`` type must match the instance.
+        envelope: The envelope (joint side, SI), or an envelope file, datasheet file or catalog
+            name (as ``drive_envelope.mujoco.set_envelope`` takes it); its ``joint`` type must
+            match the instance.
         instance: Drive instance; default from the joint type (revolute -> ``angular``,
             prismatic -> ``linear``); D6 joints need one of ``rotX|rotY|rotZ``.
 
@@ -244,12 +246,17 @@ def write_envelope(
         The drive instance written.
 
     Raises:
-        InputError: no such joint, a joint type without envelope, an instance that does not fit the
-            joint, a D6 translation or locked axis, an envelope for the other joint type, a value
-            beyond float32 in the stage's units, or a joint inside an instance of another file.
+        InputError: no such joint, an ``envelope`` that names no envelope, a joint type without
+            envelope, an instance that does not fit the joint, a D6 translation or locked axis, an
+            envelope for the other joint type, a value beyond float32 in the stage's units, or a
+            joint inside an instance of another file.
     """
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+
     prim = resolve_joint(prim_or_stage, joint_path)
-    return author_envelope(prim, envelope, instance, articulated=articulated_joints(prim.GetStage()))
+    # a dict or None reached envelope.joint as an AttributeError
+    env = resolve_envelope(envelope, where="write_envelope: argument 'envelope'")
+    return author_envelope(prim, env, instance, articulated=articulated_joints(prim.GetStage()))
 
 
 def author_envelope(
