@@ -353,3 +353,23 @@ def test_every_backend_refuses_a_tensor_dt() -> None:
     params = dw.EnvelopeArrays.from_envelopes(ENV, count=1, device="cpu")
     with pytest.raises(InputError, match=r"^dt: "):
         dw.clamp_effort_implicit(params, 5.0, 0.0, 1.0, torch.tensor(0.01))
+
+
+@pytest.mark.parametrize("bad", [{"max_effort": 12.0}, None, 50.0, "tmotor-ak80-6"])
+def test_the_clamps_name_an_envelope_argument_that_is_not_one(bad: object) -> None:
+    """A dict, None, the arguments swapped or a catalog name: one line naming the call and the type.
+
+    They were ``AttributeError: 'dict' object has no attribute 'effort_limit'`` and, swapped,
+    ``TypeError: float() argument must be ... not 'PerformanceEnvelope'``.
+    """
+    for call, run in [
+        ("clamp_effort", lambda: de.clamp_effort(bad, 50.0, ENV)),  # type: ignore[arg-type]
+        ("clamp_effort_implicit", lambda: de.clamp_effort_implicit(bad, 50.0, 1.0, 2.0, DT)),  # type: ignore[arg-type]
+    ]:
+        with pytest.raises(
+            InputError, match=rf"^{call}: argument 'envelope': expected a PerformanceEnvelope first"
+        ) as info:
+            run()
+        assert "\n" not in str(info.value) and type(bad).__name__ in str(info.value)
+    if isinstance(bad, str):
+        assert "drive_envelope.datasheet.resolve_envelope" in str(info.value)

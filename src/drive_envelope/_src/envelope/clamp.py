@@ -69,7 +69,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.envelope.model import PerformanceEnvelope, require_envelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.validation import broadcast_shape
 
@@ -109,6 +109,7 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
     Returns:
         Clamped effort [N*m or N], float64, broadcast shape; never NaN.
     """
+    envelope = require_envelope(envelope, "clamp_effort")
     effort = np.asarray(effort, dtype=np.float64)
     shape = broadcast_shape("clamp_effort", ("effort", "velocity"), (effort.shape, np.shape(velocity)))
     limit = envelope.effort_limit(velocity)  # >= 0, never NaN
@@ -167,7 +168,7 @@ def clamp_effort_implicit(
     Raises:
         InputError: ``dt`` not a finite number ``> 0``, or a negative ``response``.
     """
-    step = check_time_step(dt)
+    envelope, step = require_envelope(envelope, "clamp_effort_implicit"), check_time_step(dt)
     r = np.asarray(response, dtype=np.float64)
     negative = r < 0.0  # a NaN response is not refused: it lets the drive go, as any NaN does
     if negative.any():

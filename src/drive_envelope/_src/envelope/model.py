@@ -304,6 +304,25 @@ _SCENARIO_TABLES = ("joint", "drive", "envelope", "load", "pendulum", "friction"
 """Tables of a scenario or stand file: one of them where an envelope goes is named as such."""
 
 
+def require_envelope(value: object, where: str) -> PerformanceEnvelope:
+    """``value`` if it is a :class:`PerformanceEnvelope`, else one line naming the call and the type.
+
+    The clamps take the envelope first: a dict, a catalog name or the arguments swapped would
+    otherwise fail deep inside as an ``AttributeError`` or ``float()``'s ``TypeError``.
+    """
+    if isinstance(value, PerformanceEnvelope):
+        return value
+    hint = (
+        " (a file or catalog name: drive_envelope.datasheet.resolve_envelope)"
+        if isinstance(value, str)
+        else ""
+    )
+    raise InputError(
+        f"{where}: argument 'envelope': expected a PerformanceEnvelope first{hint}, "
+        f"got {type(value).__name__} {value!r}"
+    )
+
+
 def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> PerformanceEnvelope:
     """Build a :class:`PerformanceEnvelope` from a mapping; every error names ``source`` and the key."""
     if not isinstance(data, Mapping):
