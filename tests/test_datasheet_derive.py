@@ -680,3 +680,19 @@ def test_derive_notes_a_default_modulation_below_a_printed_speed() -> None:
         100 * 2 * 3.141592653589793 / 60 * 24 * 0.9 / 6
     )
     assert any("below the printed output_rating 38.2 rad/s" in note for note in result.notes)
+
+
+@pytest.mark.parametrize("bad", ["tmotor-ak80-6", {"name": "x", "motor": {"max_torque": "2 N*m"}}, None])
+def test_derive_names_a_datasheet_argument_that_is_not_one(bad: object) -> None:
+    """A catalog name, a plain dict or None: one line pointing to the loaders.
+
+    ``derive("tmotor-ak80-6")`` was ``AttributeError: 'str' object has no attribute 'linear_motor'``.
+    """
+    with pytest.raises(
+        InputError,
+        match=r"^derive: argument 'datasheet': expected a Datasheet \(load_datasheet\(path\), "
+        r"load_catalog_datasheet\(name\)\)",
+    ) as info:
+        derive(bad)  # type: ignore[arg-type]
+    assert "\n" not in str(info.value) and type(bad).__name__ in str(info.value)
+    assert derive(load_catalog_datasheet("tmotor-ak80-6")).envelope.max_effort == 12.0

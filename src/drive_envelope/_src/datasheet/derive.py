@@ -61,11 +61,18 @@ def derive(
         The :class:`Derivation`.
 
     Raises:
-        InputError: no candidate for maxEffort or maxActuatorVelocity (naming the inputs that would
+        InputError: ``datasheet`` is not a :class:`Datasheet` (a catalog name, say), no
+            candidate for maxEffort or maxActuatorVelocity (naming the inputs that would
             give one), a candidate or gradient out of range (inputs that overflow or underflow), an
             explicit gradient method whose inputs are missing while the voltage limit binds, or
             operating points with fewer than 2 distinct speeds.
     """
+    if not isinstance(datasheet, Datasheet):
+        # a name or a path reached build_context as an AttributeError ('str' has no 'linear_motor')
+        raise InputError(
+            f"derive: argument 'datasheet': expected a Datasheet (load_datasheet(path), "
+            f"load_catalog_datasheet(name)), got {type(datasheet).__name__} {datasheet!r}"
+        )
     if duty not in ("peak", "continuous"):
         raise InputError(f"duty: expected 'peak' or 'continuous', got {duty!r}")
     ctx = build_context(datasheet)
