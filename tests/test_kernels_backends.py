@@ -273,6 +273,18 @@ def test_bad_values_are_refused_naming_the_value(port: Backend) -> None:
         _one_line(error, "from_values", *words)
 
 
+def test_a_none_value_is_named_as_none_not_nan(port: Backend) -> None:
+    """``max_effort=None`` (alone or in a list) was read as NaN and reported as ``max_effort = nan``."""
+    for values, written in [
+        ({"max_effort": None}, "max_effort = None"),
+        ({"max_effort": [3.0, None]}, "max_effort = [3.0, None]"),
+        ({"max_effort": 1.0, "max_actuator_velocity": None}, "max_actuator_velocity = None"),
+    ]:
+        with pytest.raises(InputError) as error:
+            port.values(**values)
+        _one_line(error, "from_values", written, "expected SI numbers or strings with units")
+
+
 def test_shapes_that_do_not_broadcast_are_named(backend: Backend) -> None:
     """Refuse states whose shapes do not broadcast with the parameters, one line naming both shapes."""
     ops = backend.module

@@ -24,7 +24,8 @@ def _read(value: object, field: str, where: str) -> npt.NDArray[np.float64]:
     if any(isinstance(item, (str, bytes)) for item in items.flat):
         read = [read_envelope_value(item, field, f"{where}: {field}") for item in items.flat]
         return np.array(read, dtype=np.float64).reshape(items.shape)
-    if any(isinstance(item, (bool, np.bool_)) for item in items.flat):
+    # None would read as NaN and be reported as "nan", a value the caller never wrote
+    if any(item is None or isinstance(item, (bool, np.bool_)) for item in items.flat):
         raise InputError(f"{where}: {field} = {value!r}; expected SI numbers or strings with units")
     try:
         return np.asarray(value, dtype=np.float64)
