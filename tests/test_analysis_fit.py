@@ -155,6 +155,14 @@ def test_fit_options_are_validated() -> None:
         FitOptions(fixed={"max_effort": "12"})  # type: ignore[dict-item]
 
 
+@pytest.mark.parametrize("options", [{"outlier_quantile": 0.5}, {}, 0.5])
+def test_fit_samples_names_options_that_are_not_fit_options(options: object) -> None:
+    """A dict was AttributeError at its first field; an empty one silently meant the defaults."""
+    with pytest.raises(InputError, match=r"^fit_samples: argument 'options': expected a FitOptions") as info:
+        fit_samples([1.0, 2.0, 3.0], [3.0, 2.0, 1.0], options)  # type: ignore[arg-type]
+    assert "\n" not in str(info.value) and type(options).__name__ in str(info.value)
+
+
 def test_samples_beyond_the_fit_range_are_refused_not_mis_fitted() -> None:
     """Refuse samples above 1e100 (the fit's sums would overflow into a wrong slope) and NaN."""
     speed = np.linspace(0.0, 30.0, 50)

@@ -211,8 +211,14 @@ def fit_samples(
 
     Raises:
         InputError: arrays of different shapes, fewer than 3 samples, NaN or infinite values,
-            magnitudes above :data:`MAX_SAMPLE`.
+            magnitudes above :data:`MAX_SAMPLE`, or ``options`` that are not a :class:`FitOptions`.
     """
+    if options is not None and not isinstance(options, FitOptions):
+        # a dict of options failed at its first attribute (or, empty, silently meant the defaults)
+        raise InputError(
+            f"fit_samples: argument 'options': expected a FitOptions (FitOptions(outlier_quantile=0.5)), "
+            f"got {type(options).__name__} {options!r}"
+        )
     options = options or FitOptions()
     x, y, pair = fit_samples_input(velocity, effort)
     q, fixed = options.outlier_quantile, dict(options.fixed)
