@@ -305,3 +305,13 @@ def test_backends_agree_on_every_zero_sign(envelope: de.PerformanceEnvelope) -> 
     warp = dw.clamp_effort(arrays, effort.astype(np.float32), velocity.astype(np.float32)).numpy()
     np.testing.assert_array_equal(warp, reference.astype(np.float32))
     np.testing.assert_array_equal(np.signbit(warp), np.signbit(reference))
+
+
+def test_a_string_with_units_in_the_constructor_points_to_from_dict() -> None:
+    """The constructor takes SI numbers; a string with units is named and sent to ``from_dict``."""
+    with pytest.raises(InputError, match=r"^max_effort must be a number, got '12 N\*m'; a string with units: "
+                       r"PerformanceEnvelope\.from_dict\(\{'max_effort': \.\.\.\}\)$"):  # fmt: skip
+        PerformanceEnvelope(max_effort="12 N*m")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"^max_effort must be a number, got None$"):
+        PerformanceEnvelope(max_effort=None)  # type: ignore[arg-type]
+    assert PerformanceEnvelope.from_dict({"max_effort": "12 N*m"}).max_effort == 12.0

@@ -99,7 +99,10 @@ class PerformanceEnvelope:
         for field in ENVELOPE_FIELDS:
             value = getattr(self, field)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-                raise InputError(f"{field} must be a number, got {value!r}")
+                hint = f"; a string with units: PerformanceEnvelope.from_dict({{{field!r}: ...}})"
+                raise InputError(
+                    f"{field} must be a number, got {value!r}" + (hint if isinstance(value, str) else "")
+                )
             value = float(value)
             object.__setattr__(self, field, value)
             if math.isnan(value) or value < 0.0:
