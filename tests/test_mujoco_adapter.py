@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -401,6 +402,63 @@ def test_set_targets_reads_units_and_refuses_what_mujoco_would_zero(mujoco: Any)
         InputError, match=r"drive 'elbow': the model has no actuator 'elbow'; expected the model compiled"
     ):
         elbow.set_targets(other_model, mujoco.MjData(other_model), position=0.0)
+
+
+REPLACED = """<mujoco><compiler angle="radian"/><worldbody><body><joint name="j" range="-2 2"/>
+<inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/></body></worldbody>
+<actuator>{actuator}</actuator></mujoco>"""
+
+
+@pytest.mark.parametrize(
+    ("actuator", "inputs", "ctrlrange"),
+    [
+        ('<velocity name="m" joint="j" kv="3" ctrlrange="-5 5"/>', "pos", [-2.0, 2.0]),  # a speed range
+        ('<position name="m" joint="j" kp="30" ctrlrange="-1 1"/>', "vel", None),  # a position range
+        ('<motor name="m" joint="j" ctrlrange="-4 4"/>', "vel", None),  # a torque range
+        ('<velocity name="m" joint="j" kv="3" ctrlrange="-5 5"/>', "vel", [-5.0, 5.0]),  # kept
+        ('<position name="m" joint="j" kp="30" ctrlrange="-1 1"/>', "pos", [-1.0, 1.0]),  # kept
+        ('<intvelocity name="m" joint="j" kp="30" actrange="-1 1"/>', "pos", None),  # compiles
+    ],
+)
+def test_add_drive_replace_keeps_a_control_range_only_where_the_control_keeps_its_meaning(
+    mujoco: Any, actuator: str, inputs: str, ctrlrange: list[float] | None
+) -> None:
+    """A velocity actuator's speed range was kept as the range of the drive's target position.
+
+    ``add_drive(..., replace=True)`` (default inputs ``pos``) on a ``<velocity ctrlrange="-5 5">``
+    clipped position targets to +-5 rad; a position actuator made a ``vel`` drive clipped speeds
+    to its position range; an ``intvelocity``'s activation range failed MuJoCo's compile.
+    """
+    from drive_envelope.mujoco import add_drive
+
+    spec = mujoco.MjSpec.from_string(REPLACED.format(actuator=actuator))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the intvelocity's dynamics: a warning of its own
+        add_drive(spec, "j", envelope=_env(), stiffness=10, damping=1, inputs=inputs, replace=True)
+    model = spec.compile()
+    if ctrlrange is None:
+        assert not model.actuator_ctrllimited[0]
+    else:
+        assert model.actuator_ctrllimited[0] and model.actuator_ctrlrange[0].tolist() == ctrlrange
+
+
+def test_add_drive_replace_warns_of_a_tighter_force_range_as_mujoco_apply_does(mujoco: Any) -> None:
+    """The Python path dropped a 3 N*m ``forcerange`` for the envelope's 8 N*m without a word."""
+    from drive_envelope.mujoco import add_drive
+
+    for forcerange, warned in (("-3 3", True), ("-20 20", False)):
+        xml = REPLACED.format(actuator=f'<position name="m" joint="j" kp="30" forcerange="{forcerange}"/>')
+        spec = mujoco.MjSpec.from_string(xml)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            add_drive(spec, "j", envelope=_env(), stiffness=10, damping=1, replace=True)
+        messages = [str(w.message) for w in caught]
+        expected = (
+            "add_drive(joint='j'): actuator 'm' had forcerange [-3, 3] N*m, tighter than the envelope's "
+            "max_effort 8 N*m; the drive replaces it, so the joint's limit becomes 8 N*m "
+            "(lower max_effort to keep 3)"
+        )
+        assert messages == ([expected] if warned else []), messages
 
 
 def test_drive_state_takes_every_kind_of_drive_reference(mujoco: Any) -> None:

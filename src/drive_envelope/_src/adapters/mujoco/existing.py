@@ -230,8 +230,14 @@ def convert_actuator(
     dynprm: list[float],
     where: str,
     model: mujoco.MjModel | None = None,
+    control: str = "pos",
 ) -> None:
     """Turn actuator ``index`` into the effort actuator of a drive on its joint, in place.
+
+    Its control range is kept where its control keeps its meaning; a control that changes meaning
+    (a motor's torque or a velocity actuator's speed becoming a target position) takes the joint's
+    range for a position and no range otherwise. A ``forcerange`` tighter than the envelope's
+    max_effort, which the drive replaces, is a warning.
 
     Args:
         spec: The model, edited in place.
@@ -242,6 +248,7 @@ def convert_actuator(
         where: Start of error messages.
         model: ``spec`` compiled before any edit: its control range is the one kept (an
             ``inheritrange`` range exists only there), None: the spec's.
+        control: The drive input this actuator's control becomes (``"pos"``, ``"vel"``, ``"ff"``).
 
     Raises:
         InputError: a gear other than 1 (the drive works on the joint side).
@@ -273,13 +280,16 @@ def convert_actuator(
             if bool(model.actuator_ctrllimited[i])
             else mujoco.mjtLimited.mjLIMITED_FALSE
         )
-    if kind == "motor":
-        # its control was a force; now it is a target position: the joint's range, if any
-        joint_range = _joint_range(spec, actuator.target)
+    meaning = {"position": "pos", "velocity": "vel", "motor": "ff"}.get(kind, control)
+    if meaning != control:
+        # its control was a force or a speed (or a position) and is now something else: a range
+        # kept would clip the new control by the old one's numbers; a position gets the joint's
+        joint_range = _joint_range(spec, actuator.target) if control == "pos" else None
         limited = (
             mujoco.mjtLimited.mjLIMITED_FALSE if joint_range is None else mujoco.mjtLimited.mjLIMITED_TRUE
         )
         ctrlrange = [0.0, 0.0] if joint_range is None else list(joint_range)
+    _warn_tighter_force_range(spec, actuator, index, dynprm[0], where)
     actuator.classname = spec.default
     actuator.name = name
     actuator.plugin.plugin_name = PLUGIN_NAME
@@ -291,12 +301,42 @@ def convert_actuator(
     actuator.biasprm = [0.0] * 10
     actuator.dyntype = mujoco.mjtDyn.mjDYN_NONE
     actuator.actdim = -1
+    # an activation range without activation dynamics fails MuJoCo's compile (intvelocity's)
+    actuator.actlimited, actuator.actrange = mujoco.mjtLimited.mjLIMITED_FALSE, [0.0, 0.0]
     actuator.dynprm = dynprm
     actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
     actuator.forcerange = [0.0, 0.0]
     actuator.ctrllimited = limited
     actuator.ctrlrange = ctrlrange
     actuator.inheritrange = 0.0  # the range is explicit now (a class's inheritrange must not redo it)
+
+
+def _warn_tighter_force_range(spec: mujoco.MjSpec, actuator: Any, index: int, cap: float, where: str) -> None:
+    """Warn when the replaced actuator's ``forcerange`` limited the joint more than the drive will.
+
+    The drive replaces the actuator and its force limit (MuJoCo's clamp after the plugin would
+    undo the implicit solve), so a tighter ``forcerange`` would be lost without a word. ``cap`` is
+    the drive's ``dynprm[0]`` (max_effort, -1 for no limit).
+    """
+    import mujoco
+
+    limited = int(actuator.forcelimited)
+    low, high = (float(x) for x in actuator.forcerange)
+    if limited == int(mujoco.mjtLimited.mjLIMITED_FALSE) or not low < high:
+        return  # no force limit (auto with an empty range is none, as in MuJoCo's compiler)
+    if limited == int(mujoco.mjtLimited.mjLIMITED_AUTO) and not spec.compiler.autolimits:
+        return
+    max_effort = math.inf if cap < 0 else cap
+    tightest = min(abs(low), abs(high))
+    if tightest < max_effort * (1.0 - 1e-9):
+        slide = spec.joint(actuator.target).type == mujoco.mjtJoint.mjJNT_SLIDE
+        unit = "N" if slide else "N*m"
+        warnings.warn(
+            f"{where}: actuator {actuator.name or index!r} had forcerange [{low:g}, {high:g}] {unit}, "
+            f"tighter than the envelope's max_effort {max_effort:g} {unit}; the drive replaces it, so "
+            f"the joint's limit becomes {max_effort:g} {unit} (lower max_effort to keep {tightest:g})",
+            stacklevel=4,
+        )
 
 
 @dataclass(kw_only=True, slots=True)

@@ -239,8 +239,6 @@ def apply_drives(
                 f"{item.where or item.joint}: joint {item.joint!r}: {what} (no position gains to keep); "
                 f"give {ask}"
             )
-        if first is not None:
-            _warn_tighter_force_range(spec, spec.actuators[first.index], first.name, item)
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
@@ -327,33 +325,6 @@ def _compile_quietly(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
             return spec.copy().compile()
     except ValueError:
         return None
-
-
-def _warn_tighter_force_range(spec: mujoco.MjSpec, actuator: Any, name: str, item: Assignment) -> None:
-    """Warn when the replaced actuator's ``forcerange`` limited the joint more than the envelope will.
-
-    The drive replaces the actuator and its force limit (MuJoCo's clamp after the plugin would undo
-    the implicit solve), so a tighter ``forcerange`` would be lost without a word.
-    """
-    import mujoco
-
-    limited = int(actuator.forcelimited)
-    low, high = (float(x) for x in actuator.forcerange)
-    if limited == int(mujoco.mjtLimited.mjLIMITED_FALSE) or not low < high:
-        return  # no force limit (auto with an empty range is none, as in MuJoCo's compiler)
-    if limited == int(mujoco.mjtLimited.mjLIMITED_AUTO) and not spec.compiler.autolimits:
-        return
-    tightest = min(abs(low), abs(high))
-    envelope = item.envelope
-    if tightest < envelope.max_effort * (1.0 - 1e-9):
-        unit = "N*m" if envelope.joint == "revolute" else "N"
-        warnings.warn(
-            f"{item.where or item.joint}: joint {item.joint!r}: actuator {name!r} had forcerange "
-            f"[{low:g}, {high:g}] {unit}, tighter than the envelope's max_effort {envelope.max_effort:g} "
-            f"{unit}; the drive replaces it, so the joint's limit becomes {envelope.max_effort:g} {unit} "
-            f"(lower max_effort to keep {tightest:g})",
-            stacklevel=3,
-        )
 
 
 def _at(item: Assignment, exc: InputError) -> InputError:

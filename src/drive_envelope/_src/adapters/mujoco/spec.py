@@ -267,6 +267,7 @@ def add_drives(
                 dynprm=dynprm,
                 where=where,
                 model=before,
+                control=channels[0],
             )
             if primary.kind in ("motor", "velocity") or channels[0] != "pos":
                 plan.hold[primary.index] = joint if channels[0] == "pos" else ""
