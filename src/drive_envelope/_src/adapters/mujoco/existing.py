@@ -3,7 +3,8 @@
 A second actuator on a driven joint would add force the envelope never sees, so a drive replaces
 the joint's actuators (``add_drive(..., replace=True)``, ``drive-envelope mujoco apply``). The first
 is converted in place into the drive's effort actuator: it keeps its name, place (so ``data.ctrl``
-keeps its layout), group, delay and control range, and becomes a plugin actuator of the main
+keeps its layout), group, delay and, where its control keeps its meaning, its control range (a
+control that becomes a target position takes the joint's range), and becomes a plugin actuator of the main
 default class (so no class of the robot can give it a ``forcerange`` or a ``biastype``); the others
 are deleted. Keyframe controls follow: a deleted actuator's column goes, a new input's column is
 added (the joint's key position for ``pos``, 0 for ``vel`` and ``ff``), and a motor's torque
