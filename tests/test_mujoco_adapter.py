@@ -461,6 +461,36 @@ def test_add_drive_replace_warns_of_a_tighter_force_range_as_mujoco_apply_does(m
         assert messages == ([expected] if warned else []), messages
 
 
+def test_a_stiffness_without_a_pos_input_is_a_warning(mujoco: Any) -> None:
+    """inputs="vel" with stiffness 30: the target position is 0 and the joint is held there.
+
+    Measured: a 2 rad/s target ends at v = 0, q = c*v/k = 0.0667 rad, with no word; ``mujoco apply
+    --stiffness`` on a velocity actuator made such a drive too.
+    """
+    from drive_envelope.mujoco import add_drive
+
+    xml = REPLACED.format(actuator="")
+    message = (
+        r"^add_drive\(joint='j'\): stiffness 30 N\*m/rad but no 'pos' input: the drive's target position is 0"
+    )
+    with pytest.warns(UserWarning, match=message + ", so it pulls the joint back to 0"):
+        drive = add_drive(
+            mujoco.MjSpec.from_string(xml), "j", envelope=_env(), stiffness=30, damping=1, inputs="vel"
+        )
+    assert drive.inputs == ("vel",)
+    for stiffness, inputs in ((0.0, "vel"), (30.0, "pos vel")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            add_drive(
+                mujoco.MjSpec.from_string(xml),
+                "j",
+                envelope=_env(),
+                stiffness=stiffness,
+                damping=1,
+                inputs=inputs,
+            )
+
+
 def test_drive_state_takes_every_kind_of_drive_reference(mujoco: Any) -> None:
     """MjDriveInfo from model_drives, MjDrive, actuator name, index (numpy too) and joint name agree."""
     from drive_envelope.mujoco import drive_state, get_envelope, get_gains, model_drives

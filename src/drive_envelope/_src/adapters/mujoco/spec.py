@@ -228,6 +228,15 @@ def add_drives(
             )
     dynprm = drive_dynprm(env, stiffness=k, damping=c, where=where)
     channels = _read_inputs(inputs)
+    if k > 0.0 and "pos" not in channels:
+        # PhysX's drive law with no target position input: the target is 0, so the spring holds
+        # the joint at 0 against the velocity target (v settles at 0, q at c*v_target/k)
+        warnings.warn(
+            f"{where}: stiffness {k:g} {k_unit} but no 'pos' input: the drive's target position is 0, "
+            "so it pulls the joint back to 0 (a velocity drive tracks its target only with stiffness 0; "
+            "or add 'pos' to inputs)",
+            stacklevel=3,
+        )
     # the model as MuJoCo compiles it before the edit: dampratio gains, inheritrange control ranges
     # and the joints' qpos addresses for keyframes exist only there
     before = _compiled(spec) if replace and len(spec.actuators) else None
