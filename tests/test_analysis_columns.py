@@ -26,6 +26,17 @@ def _error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
     return err
 
 
+def test_a_chain_run_of_simulate_says_how_to_check_one_joint() -> None:
+    """simulate's chain CSV has JOINT.velocity columns: the error gives the flags for its first joint."""
+    header = ["time", "hip.position", "hip.velocity", "hip.effort", "knee.velocity", "knee.effort"]
+    with pytest.raises(InputError) as caught:
+        log_plan(header, LogColumns(), "run.csv")
+    assert str(caught.value) == (
+        f"run.csv: no column 'velocity' or 'effort' (columns: {', '.join(header)}); the columns are per "
+        "joint (hip, knee): check one with --velocity-column hip.velocity --effort-column hip.effort"
+    )
+
+
 def test_every_missing_required_column_is_named_in_one_line() -> None:
     """Both missing roles, the columns there and both flags; identify's list of what a bench log needs."""
     with pytest.raises(InputError) as caught:

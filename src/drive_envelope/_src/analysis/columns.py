@@ -161,7 +161,12 @@ def _missing(
     nearest = nearest_key(str(missing[0].column).strip(), free) if free else ""
     fixes = []
     flags = [role.flag for role in missing if role.flag]
-    if flags:
+    joints = _per_joint(free, [str(role.column).strip() for role in missing])
+    if joints and len(flags) == len(missing):  # simulate's chain format: JOINT.velocity, JOINT.effort
+        nearest = ""
+        example = " ".join(f"{role.flag} {joints[0]}.{str(role.column).strip()}" for role in missing)
+        fixes.append(f"the columns are per joint ({', '.join(joints)}): check one with {example}")
+    elif flags:
         fixes.append(f"name {'it' if len(flags) == 1 else 'them'} with {' and '.join(flags)}")
     if needs:
         required = [str(role.column) for role in roles if role.required and role.column is not None]
@@ -171,6 +176,12 @@ def _missing(
     return f"{label}: no column {wanted} (columns: {', '.join(cells) or 'none'}){nearest}" + "".join(
         f"; {fix}" for fix in fixes
     )
+
+
+def _per_joint(names: Sequence[str], wanted: Sequence[str]) -> list[str]:
+    """The prefixes ``JOINT`` for which every wanted name stands as ``JOINT.name``, in header order."""
+    prefixes = [name[: -len(f".{wanted[0]}")] for name in names if name.endswith(f".{wanted[0]}")]
+    return [joint for joint in prefixes if joint and all(f"{joint}.{other}" in names for other in wanted)]
 
 
 def _units(
