@@ -337,6 +337,19 @@ def test_write_takes_a_source_as_set_envelope_does_and_names_anything_else() -> 
         write_envelope(_stage(), "/Robot/hinge", "actuonix-l16-35-6-r")
 
 
+@pytest.mark.parametrize("bad", [None, "examples/usd/robot.usda"])
+def test_list_drives_and_stage_units_name_an_argument_that_is_not_a_stage(bad: object) -> None:
+    """None or a path was USD's multi-line ``Tf.ErrorException`` ('Invalid UsdStage')."""
+    from drive_envelope.usd import list_drives, stage_units
+
+    for call in (list_drives, stage_units):
+        with pytest.raises(
+            InputError, match=r"^argument 'stage': expected a Usd\.Stage \(drive_envelope\.usd\.open_stage"
+        ) as info:
+            call(bad)  # type: ignore[arg-type]
+        assert "\n" not in str(info.value) and type(bad).__name__ in str(info.value)
+
+
 def test_read_without_api_raises() -> None:
     """Refuse to read an envelope that was never applied."""
     from drive_envelope.usd import read_envelope

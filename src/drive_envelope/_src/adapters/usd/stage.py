@@ -228,10 +228,15 @@ def stage_units(stage: Usd.Stage) -> StageUnits:
     """The stage's ``metersPerUnit`` and ``kilogramsPerUnit`` (USD fallbacks 0.01 and 1).
 
     Raises:
-        InputError: a unit that is not a finite number > 0.
+        InputError: ``stage`` is not a valid ``Usd.Stage``, or a unit that is not a finite number > 0.
     """
-    from pxr import UsdGeom, UsdPhysics
+    from pxr import Usd, UsdGeom, UsdPhysics
 
+    if not isinstance(stage, Usd.Stage):  # None or a path: USD's multi-line Tf.ErrorException
+        raise InputError(
+            f"argument 'stage': expected a Usd.Stage (drive_envelope.usd.open_stage(path)), "
+            f"got {type(stage).__name__} {stage!r}"
+        )
     meters, kilograms = UsdGeom.GetStageMetersPerUnit(stage), UsdPhysics.GetStageKilogramsPerUnit(stage)
     try:
         return StageUnits(meters_per_unit=float(meters), kilograms_per_unit=float(kilograms))
