@@ -163,6 +163,13 @@ def test_mapping_errors_name_the_file_and_joint(tmp_path: Path) -> None:
         check_log(mapping, {"joint": ["hip"], "velocity": [0.0], "effort": [0.0]})
     with pytest.raises(InputError, match="needs a joint column"):
         check_log(mapping, {"velocity": [0.0], "effort": [0.0]})
+    # a regular expression for a key, or a key in another case: the error says which (it only listed keys)
+    mapping.write_text('[joints]\n"wrist_.*" = { max_effort = 1.0 }\n', encoding="utf-8")
+    with pytest.raises(InputError, match=r"\(keys: wrist_\.\*\); patterns are globs .* not regular exp"):
+        check_log(mapping, {"joint": ["wrist_1"], "velocity": [0.0], "effort": [0.0]})
+    mapping.write_text("[joints]\nHip = { max_effort = 1.0 }\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"did you mean 'Hip'\? \(names are case-sensitive\)"):
+        check_log(mapping, {"joint": ["hip"], "velocity": [0.0], "effort": [0.0]})
     mapping.write_text("[joints]\nknee = 3\n", encoding="utf-8")
     with pytest.raises(InputError, match=r"joints\.knee"):
         load_joint_mapping(mapping)

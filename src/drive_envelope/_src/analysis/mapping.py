@@ -80,7 +80,10 @@ class JointMapping:
         index = self._winner(joint)
         if index is None:
             keys = ", ".join(key for key, _ in self.entries)
-            raise InputError(f"{self.source}: no envelope for joint {joint!r} of the log (keys: {keys})")
+            hint = next((glob_hint(key) for key, _ in self.entries if glob_hint(key)), "")
+            hint = hint or case_hint(joint, [key for key, _ in self.entries])
+            where = f"{self.source}: no envelope for joint {joint!r} of the log"
+            raise InputError(f"{where} (keys: {keys}){hint}")
         return self.entries[index][1]
 
     def unused_keys(self, joints: Sequence[str]) -> tuple[UnusedKey, ...]:
