@@ -373,3 +373,31 @@ def test_the_clamps_name_an_envelope_argument_that_is_not_one(bad: object) -> No
         assert "\n" not in str(info.value) and type(bad).__name__ in str(info.value)
     if isinstance(bad, str):
         assert "drive_envelope.datasheet.resolve_envelope" in str(info.value)
+
+
+def test_implicit_drive_effort_names_what_physx_never_takes() -> None:
+    """A negative gain was an anti-spring (stiffness -30 gave -13.8 N*m toward the error's far side),
+    a negative response 0 without a word, a NaN gain a NaN effort; strings, shapes and the drive
+    type were bare ValueErrors. Each is one line naming the argument.
+    """
+    base = {"stiffness": 30.0, "damping": 1.0, "position_error": 0.5, "velocity": 0.0,
+            "target_velocity": 0.0, "response": 20.0, "dt": 0.005}  # fmt: skip
+    assert float(implicit_drive_effort(**base)) > 0.0  # type: ignore[arg-type]
+    for change, message in [
+        ({"stiffness": -30.0}, r"stiffness: expected >= 0 \[N\*m/rad or N/m\], got -30\.0"),
+        ({"damping": [1.0, np.nan]}, r"damping: expected >= 0 \[N\*m\*s/rad or N\*s/m\], got nan"),
+        ({"response": -20.0}, r"response: expected >= 0 \[rad/s/\(N\*m\*s\) or m/s/\(N\*s\)\], got -20\.0"),
+        ({"stiffness": -1.0, "drive_type": "acceleration"}, r"stiffness: expected >= 0 \[1/s\^2\]"),
+        ({"stiffness": "30 N*m/deg"}, r"stiffness: expected SI numbers, got '30 N\*m/deg'"),
+        (
+            {"stiffness": np.ones(3), "damping": np.ones(2)},
+            r"shapes do not broadcast \(stiffness=\(3,\), damping=\(2,\)",
+        ),
+    ]:
+        with pytest.raises(InputError, match=r"^implicit_drive_effort: " + message) as info:
+            implicit_drive_effort(**{**base, **change})  # type: ignore[arg-type]
+        assert "\n" not in str(info.value)
+    with pytest.raises(InputError, match=r"^drive_type must be 'force' or 'acceleration', got 'position'$"):
+        implicit_drive_effort(**{**base, "drive_type": "position"})  # type: ignore[arg-type]
+    # a NaN response lets go, as in the clamps: 0 for a force drive
+    assert float(implicit_drive_effort(**{**base, "response": np.nan})) == 0.0  # type: ignore[arg-type]

@@ -23,6 +23,8 @@ import numpy as np
 import numpy.typing as npt
 
 from drive_envelope._src.envelope.clamp import check_time_step
+from drive_envelope._src.errors import InputError
+from drive_envelope._src.validation import broadcast_shape
 
 DriveType = Literal["force", "acceleration"]
 
@@ -54,14 +56,37 @@ def implicit_drive_effort(
     Returns:
         The effort ``J/dt`` [N*m or N], before any clamp; broadcast shape, float64. A force drive
         on a DOF with zero response gives 0 (PhysX's guard), an acceleration drive gives inf there.
+
+    Raises:
+        InputError: ``dt`` not finite and > 0, an unknown ``drive_type``, a value that is not a
+            number, shapes that do not broadcast, or a negative (or NaN) gain or negative response.
     """
     dt = check_time_step(dt)  # the one time-step rule (docs/architecture.md)
     if drive_type not in ("force", "acceleration"):
-        raise ValueError(f"drive_type must be 'force' or 'acceleration', got {drive_type!r}")
-    k, c, err, v, v_target, r = (
-        np.asarray(a, dtype=np.float64)
-        for a in (stiffness, damping, position_error, velocity, target_velocity, response)
-    )
+        raise InputError(f"drive_type must be 'force' or 'acceleration', got {drive_type!r}")
+    names = ("stiffness", "damping", "position_error", "velocity", "target_velocity", "response")
+    arrays = []
+    values = (stiffness, damping, position_error, velocity, target_velocity, response)
+    for name, value in zip(names, values, strict=True):
+        try:
+            arrays.append(np.asarray(value, dtype=np.float64))
+        except (TypeError, ValueError):  # a string with units, None in a list: float()'s error
+            raise InputError(f"implicit_drive_effort: {name}: expected SI numbers, got {value!r}") from None
+    broadcast_shape("implicit_drive_effort", names, [a.shape for a in arrays])
+    k, c, err, v, v_target, r = arrays
+    gains = ("1/s^2", "1/s") if drive_type == "acceleration" else ("N*m/rad or N/m", "N*m*s/rad or N*s/m")
+    # a negative gain is an anti-spring (it pushes away from the target) and a NaN one a NaN effort;
+    # a negative response is refused as clamp_effort_implicit refuses it (a NaN one lets go there)
+    for name, array, unit, nan in (
+        ("stiffness", k, gains[0], True),
+        ("damping", c, gains[1], True),
+        ("response", r, "rad/s/(N*m*s) or m/s/(N*s)", False),
+    ):
+        bad = (array < 0.0) | (np.isnan(array) & nan)
+        if np.any(bad):
+            raise InputError(
+                f"implicit_drive_effort: {name}: expected >= 0 [{unit}], got {float(array[bad].flat[0])!r}"
+            )
     a = dt * (dt * k + c)
     rhs = dt * k * err + dt * c * v_target - a * v
     if drive_type == "force":
