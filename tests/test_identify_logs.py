@@ -53,6 +53,18 @@ def test_sidecar_gives_the_duty_gain(tmp_path: Path) -> None:
     assert read_bench_log(path).duty_per_rad == 0.5
 
 
+def test_a_sidecar_given_as_the_log_points_to_the_log(tmp_path: Path) -> None:
+    """NAME.json passed as the log: named as a sidecar, with the log beside it (it was "columns: {")."""
+    _write(tmp_path / "c.csv.gz", "")  # the log beside it, whatever its format
+    sidecar = _write(tmp_path / "c.json", json.dumps({"kp_duty_per_rad": 0.5}))
+    with pytest.raises(InputError) as caught:
+        read_bench_log(sidecar)
+    assert str(caught.value) == (
+        f"{sidecar}: a JSON file, not a bench log (CSV, Parquet or a ROS 2 bag); a JSON file beside a log "
+        "is its sidecar: pass the log (c.csv.gz), its sidecar is read with it"
+    )
+
+
 def test_parquet_log(tmp_path: Path) -> None:
     """Read the same log from Parquet."""
     pa = pytest.importorskip("pyarrow")

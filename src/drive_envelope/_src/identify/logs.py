@@ -118,6 +118,13 @@ def read_bench_log(
         columns = _read_bag(file, label, bag or BagOptions(), joint)
     else:
         input_file(file, label, max_bytes=None, what="bench log file")  # a FIFO would block: refused
+        if file.suffix.lower() == ".json":  # read as CSV it gave "no column ... (columns: {)"
+            logs = [file.with_suffix(end) for end in (".csv", ".csv.gz", ".parquet")]
+            log = next((candidate for candidate in logs if candidate.is_file()), logs[0])
+            raise InputError(
+                f"{label}: a JSON file, not a bench log (CSV, Parquet or a ROS 2 bag); a JSON file "
+                f"beside a log is its sidecar: pass the log ({log.name}), its sidecar is read with it"
+            )
         columns = _read_parquet(file, label) if file.suffix.lower() in _PARQUET else _read_csv(file, label)
     sidecar = _sidecar(file)
     rows = columns["time"].shape[0]
