@@ -362,6 +362,40 @@ def test_author_implicit_envelopes_refuses_a_bad_map_and_writes_nothing(tmp_path
 
 
 @pytest.mark.isaaclab
+@pytest.mark.usd
+def test_author_implicit_envelopes_reads_gain_units_and_refuses_unmatched_regexes(tmp_path: Path) -> None:
+    """A string gain was passed to ImplicitActuatorCfg as it was (Isaac Lab refuses it when the
+    scene is built) and a regex that matches no joint likewise; now strings with units are read
+    per radian and a bad gain is one line before anything is written.
+    """
+    from drive_envelope.isaaclab import author_implicit_envelopes
+
+    def author(name: str, stiffness: object, damping: object = 2.0) -> Any:
+        return author_implicit_envelopes(
+            _anymal(), REPO / "examples" / "newton" / "anymal_map.toml", tmp_path / name,
+            stiffness=stiffness, damping=damping,  # type: ignore[arg-type]
+        )  # fmt: skip
+
+    setup = author("deg.usda", "80 N*m/deg", {".*_KFE": "0.1 N*m*s/deg", ".*_H[AF][AE]": 2})
+    assert setup.actuator.stiffness == pytest.approx(80 * 180 / math.pi)
+    assert setup.actuator.damping == {".*_KFE": pytest.approx(0.1 * 180 / math.pi), ".*_H[AF][AE]": 2.0}
+    for name, stiffness, message in [
+        (
+            "typo.usda",
+            {".*_KFEE": 80.0},
+            r"stiffness\['\.\*_KFEE'\]: matches none of the joints the map equipped",
+        ),
+        ("unit.usda", "80 N*m", r"stiffness: '80 N\*m' has no matching angle unit"),
+        ("neg.usda", -1.0, r"stiffness: expected >= 0 and finite"),
+        ("list.usda", [80.0], r"stiffness: expected a number \[N\*m/rad or N/m\] or a string with units"),
+    ]:
+        with pytest.raises(InputError, match=r"^author_implicit_envelopes: " + message) as info:
+            author(name, stiffness)
+        assert "\n" not in str(info.value)
+        assert not (tmp_path / name).exists()
+
+
+@pytest.mark.isaaclab
 @pytest.mark.filterwarnings("ignore:`torch.jit.script` is deprecated:FutureWarning")
 def test_check_implicit_actuator_findings() -> None:
     """A partial effort_limit_sim dict (maxForce 0), an explicit cfg, a string joint_names_expr.

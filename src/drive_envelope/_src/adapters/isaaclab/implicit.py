@@ -16,6 +16,7 @@ would override the envelope.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import re
 from collections.abc import Mapping
@@ -79,7 +80,6 @@ def author_implicit_envelopes(
     stage = open_overlay(asset)  # the asset's own layers are never edited
     assignments, _ = map_assignments(stage, read_map(joint_map))
     applied = apply_envelopes(stage, assignments)
-    written = save_stage(stage, output, flatten=flatten)
     envelopes: dict[str, PerformanceEnvelope] = {}
     for drive in applied:
         name = drive.joint_path.rsplit("/", 1)[-1]
@@ -88,12 +88,70 @@ def author_implicit_envelopes(
                 f"{joint_map}: joints named {name!r} get different envelopes; Isaac Lab names joints by "
                 "prim name, so one ImplicitActuatorCfg cannot tell them apart"
             )
+    # checked before anything is written: Isaac Lab would refuse a string or an unmatched regex
+    # only when the scene is built
+    gains = {
+        label: _gains(value, label, unit, envelopes)
+        for label, value, unit in (("stiffness", stiffness, "N*m/rad"), ("damping", damping, "N*m*s/rad"))
+    }
+    written = save_stage(stage, output, flatten=flatten)
     actuator = ImplicitActuatorCfg(
-        joint_names_expr=[re.escape(name) for name in envelopes],
-        stiffness=dict(stiffness) if isinstance(stiffness, Mapping) else stiffness,
-        damping=dict(damping) if isinstance(damping, Mapping) else damping,
+        joint_names_expr=[re.escape(name) for name in envelopes], **gains
     )  # the effort and speed limits stay None (2.3's and 3.0's default): Isaac Lab keeps the USD's
     return ImplicitEnvelopeSetup(usd_path=written[0], envelopes=envelopes, actuator=actuator)
+
+
+def _gains(
+    value: object, label: str, unit: str, envelopes: Mapping[str, PerformanceEnvelope]
+) -> float | dict[str, float] | None:
+    """A gain for ``ImplicitActuatorCfg`` in SI: a number, a string with units, or ``{regex: either}``.
+
+    Each string is read in its joint type's unit (per radian on revolute joints, ``"80 N*m/deg"``
+    included); each regex must match one of the joints the map equipped.
+    """
+    from drive_envelope._src.values import read_quantity
+
+    where = f"author_implicit_envelopes: {label}"
+    linear = {"N*m/rad": "N/m", "N*m*s/rad": "N*s/m"}[unit]
+
+    def number(item: object, joint: str, at: str) -> float:
+        if isinstance(item, str):
+            revolute = envelopes[joint].joint == "revolute"
+            result = read_quantity(item, unit if revolute else linear, at)
+        elif isinstance(item, numbers.Real) and not isinstance(item, bool):
+            result = float(item)
+        else:
+            raise InputError(
+                f"{at}: expected a number [{unit} or {linear}] or a string with units, got {item!r}"
+            )
+        if not 0.0 <= result < math.inf:
+            raise InputError(f"{at}: expected >= 0 and finite [{unit} or {linear}], got {item!r}")
+        return result
+
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        found = {number(value, joint, where) for joint in envelopes}
+        if len(found) == 1:
+            return found.pop()
+        # "80 N*m/deg" on revolute and prismatic joints: two SI numbers, one per joint
+        return {re.escape(joint): number(value, joint, where) for joint in envelopes}
+    result: dict[str, float] = {}
+    for pattern, item in value.items():
+        try:
+            matched = [joint for joint in envelopes if re.fullmatch(str(pattern), joint)]
+        except re.error as exc:
+            raise InputError(f"{where}[{pattern!r}]: not a regular expression ({exc})") from None
+        if not matched:
+            raise InputError(
+                f"{where}[{pattern!r}]: matches none of the joints the map equipped: {sorted(envelopes)}"
+            )
+        values = {number(item, joint, f"{where}[{pattern!r}]") for joint in matched}
+        if len(values) > 1:
+            result.update({re.escape(joint): number(item, joint, where) for joint in matched})
+        else:
+            result[str(pattern)] = values.pop()
+    return result
 
 
 def _patterns(actuator: Any) -> list[re.Pattern[str]]:
