@@ -470,3 +470,8 @@ def test_a_usd_joint_path_with_a_typo_names_the_nearest_joints() -> None:
         InputError, match=r"'/Zzz': no such prim .*; it has 2 joint\(s\), e\.g\. '/Robot/Arm/RevoluteJoint'"
     ):
         resolve_joint(stage, "/Zzz")
+    with pytest.raises(  # the link's path, not its joint's (Newton's cartpole: /cartPole is an Xform)
+        InputError,
+        match=r"'/Robot/Rail': prim of type '' is not a UsdPhysics joint \(did you mean '/Robot/Rail/Slider'",
+    ):
+        resolve_joint(stage, "/Robot/Rail")

@@ -123,6 +123,7 @@ def resolve_joint(prim_or_stage: Any, joint_path: str | None) -> Usd.Prim:
     if not prim.IsA(UsdPhysics.Joint):
         raise InputError(
             f"joint path {str(path)!r}: prim of type {prim.GetTypeName()!r} is not a UsdPhysics joint"
+            f"{_nearest_joints(stage, path)}"
         )
     return prim
 
