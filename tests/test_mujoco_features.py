@@ -295,6 +295,42 @@ def test_set_gains_reads_units_as_add_drive_does(mujoco: Any) -> None:
         set_gains(model, "accel", stiffness="1 N*m/rad")
 
 
+def test_a_spec_or_data_where_the_model_goes_is_one_line(mujoco: Any) -> None:
+    """An MjSpec (not compiled) or the MjData (arguments swapped) was an AttributeError on
+    ``nplugin`` or ``plugin_attradr``; a model where the data goes, on ``qvel``.
+    """
+    from drive_envelope.mujoco import drive_state, get_envelope, model_drives, set_envelope, set_gains
+
+    xml = TWIN.format(
+        actuators='<plugin name="drive" joint="a" plugin="drive_envelope.envelope" dynprm="10 -1 0 0 10 1"/>'
+    )
+    spec = mujoco.MjSpec.from_string(xml)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    spec_hint = r"expected a mujoco\.MjModel \(spec\.compile\(\)\), got MjSpec$"
+    for where, call, message in [
+        ("model_drives", lambda: model_drives(spec), spec_hint),
+        ("set_envelope", lambda: set_envelope(spec, "drive", PerformanceEnvelope(max_effort=1.0)), spec_hint),
+        ("get_envelope", lambda: get_envelope(data, "drive"), r"expected a mujoco\.MjModel, got MjData$"),
+        (
+            "set_gains",
+            lambda: set_gains(data, "drive", stiffness=1.0),
+            r"expected a mujoco\.MjModel, got MjData$",
+        ),
+        (
+            "drive_state",
+            lambda: drive_state(data, model, "drive"),
+            r"expected a mujoco\.MjModel, got MjData$",
+        ),
+    ]:
+        with pytest.raises(InputError, match=rf"^{where}: argument 'model': {message}"):
+            call()
+    with pytest.raises(
+        InputError, match=r"^drive_state: argument 'data': expected a mujoco\.MjData, got MjModel$"
+    ):
+        drive_state(model, model, "drive")
+
+
 def test_solver_stats_report_the_solve_and_the_plugin_has_no_state(mujoco: Any) -> None:
     """The solve's iterations and drive solves of the last step; none of it is MuJoCo state."""
     from drive_envelope.mujoco import solver_stats

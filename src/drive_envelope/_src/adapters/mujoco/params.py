@@ -136,6 +136,21 @@ def _name(model: mujoco.MjModel, kind: int, index: int) -> str:
     return mujoco.mj_id2name(model, kind, index) or f"#{index}"
 
 
+def require_model(model: object, where: str) -> None:
+    """One line for an ``MjSpec`` or an ``MjData`` (the arguments swapped) where an ``MjModel`` goes.
+
+    Without it the first model field read fails as ``AttributeError: ... has no attribute
+    'nplugin'`` (or ``'plugin_attradr'``, ``'compile'``).
+    """
+    import mujoco
+
+    if not isinstance(model, mujoco.MjModel):
+        hint = " (spec.compile())" if isinstance(model, mujoco.MjSpec) else ""
+        raise InputError(
+            f"{where}: argument 'model': expected a mujoco.MjModel{hint}, got {type(model).__name__}"
+        )
+
+
 def model_drives(model: mujoco.MjModel) -> tuple[MjDriveInfo, ...]:
     """Every drive of ``drive_envelope.envelope`` in a compiled model, in actuator order.
 
@@ -144,6 +159,7 @@ def model_drives(model: mujoco.MjModel) -> tuple[MjDriveInfo, ...]:
     """
     from drive_envelope._src.adapters.mujoco.loader import plugin_slot
 
+    require_model(model, "model_drives")
     slot = plugin_slot()
     drives = []
     for instance in range(model.nplugin):
@@ -226,6 +242,7 @@ def find_drive(model: mujoco.MjModel, drive: object, where: str, argument: str =
     """
     import mujoco
 
+    require_model(model, where)
     drives = model_drives(model)
     owner = {a: info for info in drives for a in info.actuators}
     prefix = f"{where}: argument {argument!r}"

@@ -45,7 +45,11 @@ def drive_state(model: mujoco.MjModel, data: mujoco.MjData, drive: DriveRef) -> 
     Raises:
         InputError: ``drive`` names no drive of ``model``, or is of another type.
     """
+    import mujoco
+
     dof, out = _ids(model, find_drive(model, drive, "drive_state", argument="drive"))
+    if not isinstance(data, mujoco.MjData):
+        raise InputError(f"drive_state: argument 'data': expected a mujoco.MjData, got {type(data).__name__}")
     return float(data.qvel[dof]), float(data.actuator_force[out])
 
 
