@@ -491,6 +491,19 @@ def test_a_stiffness_without_a_pos_input_is_a_warning(mujoco: Any) -> None:
             )
 
 
+def test_add_drive_names_a_spec_that_is_not_one(mujoco: Any) -> None:
+    """A compiled MjModel was ``TypeError: unhashable type``, XML text ``AttributeError: 'str' ... 'joint'``."""
+    from drive_envelope.mujoco import add_drive, add_drives
+
+    for bad in (mujoco.MjModel.from_xml_string(ARM), ARM):
+        with pytest.raises(
+            InputError, match=r"^add_drive: argument 'spec': expected a mujoco\.MjSpec \(mujoco\.MjSpec"
+        ):
+            add_drive(bad, "elbow", envelope=_env(), stiffness=1, damping=1)
+        with pytest.raises(InputError, match=rf"got {type(bad).__name__}$"):
+            add_drives(bad, ["elbow"], envelope=_env(), stiffness=1, damping=1)
+
+
 def test_drive_state_takes_every_kind_of_drive_reference(mujoco: Any) -> None:
     """MjDriveInfo from model_drives, MjDrive, actuator name, index (numpy too) and joint name agree."""
     from drive_envelope.mujoco import drive_state, get_envelope, get_gains, model_drives

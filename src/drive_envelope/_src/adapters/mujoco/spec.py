@@ -203,6 +203,15 @@ def add_drives(
     from drive_envelope._src.adapters.mujoco.loader import load_plugin
 
     load_plugin()
+    if not isinstance(spec, mujoco.MjSpec):  # an MjModel or XML text: a TypeError deep in the edit
+        hint = (
+            " (mujoco.MjSpec.from_file(path) or from_string(xml))"
+            if isinstance(spec, (str, mujoco.MjModel))
+            else ""
+        )
+        raise InputError(
+            f"add_drive: argument 'spec': expected a mujoco.MjSpec{hint}, got {type(spec).__name__}"
+        )
     joints = list(joints)
     labels: list[str | None] = list(names) if names is not None else [None] * len(joints)
     if not joints or len(set(joints)) != len(joints) or len(labels) != len(joints):
