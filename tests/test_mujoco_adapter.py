@@ -492,7 +492,7 @@ def test_a_stiffness_without_a_pos_input_is_a_warning(mujoco: Any) -> None:
 
 
 def test_add_drive_names_a_spec_that_is_not_one(mujoco: Any) -> None:
-    """A compiled MjModel was ``TypeError: unhashable type``, XML text ``AttributeError: 'str' ... 'joint'``."""
+    """A compiled MjModel was ``TypeError: unhashable type``, XML text an ``AttributeError``."""
     from drive_envelope.mujoco import add_drive, add_drives
 
     for bad in (mujoco.MjModel.from_xml_string(ARM), ARM):
