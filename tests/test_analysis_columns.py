@@ -33,7 +33,7 @@ def test_a_chain_run_of_simulate_says_how_to_check_one_joint() -> None:
         log_plan(header, LogColumns(), "run.csv")
     assert str(caught.value) == (
         f"run.csv: no column 'velocity' or 'effort' (columns: {', '.join(header)}); the columns are per "
-        "joint (hip, knee): check one with --velocity-column hip.velocity --effort-column hip.effort"
+        "joint (hip, knee): name one with --velocity-column hip.velocity --effort-column hip.effort"
     )
 
 

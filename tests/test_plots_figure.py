@@ -271,7 +271,10 @@ def test_plot_takes_the_column_flags_its_errors_name(
     code, _, err = run_cli(
         ["plot", str(bench_envelope_file), "-t", str(log), "-o", str(tmp_path / "a.png")], capsys
     )
-    assert code == 2 and "--velocity-column and --effort-column" in err
+    assert (
+        code == 2
+        and "per joint (hip): name one with --velocity-column hip.velocity --effort-column hip.effort" in err
+    )
     columns = ["--velocity-column", "hip.velocity", "--effort-column", "hip.effort", "--time-column", "time"]
     argv = [
         "plot",

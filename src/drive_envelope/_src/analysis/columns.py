@@ -165,7 +165,7 @@ def _missing(
     if joints and len(flags) == len(missing):  # simulate's chain format: JOINT.velocity, JOINT.effort
         nearest = ""
         example = " ".join(f"{role.flag} {joints[0]}.{str(role.column).strip()}" for role in missing)
-        fixes.append(f"the columns are per joint ({', '.join(joints)}): check one with {example}")
+        fixes.append(f"the columns are per joint ({', '.join(joints)}): name one with {example}")
     elif flags:
         fixes.append(f"name {'it' if len(flags) == 1 else 'them'} with {' and '.join(flags)}")
     if needs:
