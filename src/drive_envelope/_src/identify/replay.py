@@ -25,7 +25,8 @@ import numpy.typing as npt
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.logs import BenchLog
 from drive_envelope._src.identify.stand import IdentifyStand
-from drive_envelope._src.teststand.batch import BatchResult, BatchSolver, BatchStand, simulate_batch
+from drive_envelope._src.teststand.batch import BatchResult, BatchStand, simulate_batch
+from drive_envelope._src.teststand.engines.reference import batch_solver
 
 FloatArray = npt.NDArray[np.float64]
 _DIVERGED = 1e3  # error given to a diverged candidate [rad]: worse than any real fit
@@ -61,14 +62,7 @@ class Replay:
         self.stand = stand
         self.logs = tuple(logs)
         self.dt = float(np.mean(dts))
-        sim = stand.scenario.simulation
-        self.solver = BatchSolver(
-            dt=self.dt,
-            solver=sim.solver,
-            position_iterations=sim.position_iterations,
-            velocity_iterations=sim.velocity_iterations,
-            drive_type=stand.scenario.drive.type,
-        )
+        self.solver = batch_solver(stand.scenario, self.dt)
         rows = max(log.rows for log in logs)
         count = len(logs)
         self.rows = np.array([log.rows for log in logs])

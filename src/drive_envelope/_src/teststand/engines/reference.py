@@ -88,14 +88,19 @@ def _batch(scenario: Scenario) -> tuple[BatchSolver, BatchStand]:
         "applied_effort": load.applied_effort,
         "external_effort": load.external_effort,
     }
-    solver = BatchSolver(
-        dt=sim.dt,
+    return batch_solver(scenario), BatchStand(**{name: np.array([value]) for name, value in values.items()})
+
+
+def batch_solver(scenario: Scenario, dt: float | None = None) -> BatchSolver:
+    """The scenario's solver settings for the batch, at its own step or at ``dt`` [s] (a log's)."""
+    sim = scenario.simulation
+    return BatchSolver(
+        dt=sim.dt if dt is None else dt,
         solver=sim.solver,
         position_iterations=sim.position_iterations,
         velocity_iterations=sim.velocity_iterations,
-        drive_type=drive.type,
+        drive_type=scenario.drive.type,
     )
-    return solver, BatchStand(**{name: np.array([value]) for name, value in values.items()})
 
 
 def step(scenario: Scenario, position: float, velocity: float) -> JointState:
