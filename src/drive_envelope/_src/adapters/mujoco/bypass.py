@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from drive_envelope._src.adapters.mujoco.existing import gain_kind
+from drive_envelope._src.adapters.mujoco.existing import compiled_gain_kind
 from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
 
 if TYPE_CHECKING:
@@ -101,15 +101,7 @@ def other_actuators(model: mujoco.MjModel, drives: Sequence[Any]) -> list[OtherA
     reached = _reached_dofs(model, others)
     found = []
     for i in others:
-        if int(model.actuator_plugin[i]) >= 0:
-            kind = "plugin"
-        else:
-            kind = gain_kind(
-                int(model.actuator_gaintype[i]),
-                int(model.actuator_biastype[i]),
-                list(model.actuator_gainprm[i]),
-                list(model.actuator_biasprm[i]),
-            )[0]
+        kind = "plugin" if int(model.actuator_plugin[i]) >= 0 else compiled_gain_kind(model, i)[0]
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) or f"#{i}"
         joints = sorted({int(model.dof_jntid[dof]) for dof in reached[i]})
         for joint in joints:

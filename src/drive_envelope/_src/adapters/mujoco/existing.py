@@ -23,12 +23,11 @@ import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME
 from drive_envelope._src.errors import InputError
 
 if TYPE_CHECKING:
     import mujoco
-
-PLUGIN_NAME = "drive_envelope.envelope"
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -82,12 +81,7 @@ def _kind(
         return "other", None, None
     i = compiled_id(model, actuator, index)
     if model is not None and i >= 0:
-        return gain_kind(
-            int(model.actuator_gaintype[i]),
-            int(model.actuator_biastype[i]),
-            [float(v) for v in model.actuator_gainprm[i]],
-            [float(v) for v in model.actuator_biasprm[i]],
-        )
+        return compiled_gain_kind(model, i)
     return gain_kind(
         int(actuator.gaintype), int(actuator.biastype), list(actuator.gainprm), list(actuator.biasprm)
     )
@@ -119,6 +113,13 @@ def gain_kind(
         if kp > 0 and biasprm[1] == 0 and kv == kp:
             return "velocity", 0.0, kp  # velocity: kv*(u - qdot)
     return "other", None, None
+
+
+def compiled_gain_kind(model: mujoco.MjModel, i: int) -> tuple[str, float | None, float | None]:
+    """:func:`gain_kind` of actuator ``i`` of a compiled model."""
+    gainprm = [float(v) for v in model.actuator_gainprm[i]]
+    biasprm = [float(v) for v in model.actuator_biasprm[i]]
+    return gain_kind(int(model.actuator_gaintype[i]), int(model.actuator_biastype[i]), gainprm, biasprm)
 
 
 def joint_actuators(
@@ -192,6 +193,19 @@ def convert_channel(spec: mujoco.MjSpec, index: int, *, instance: str) -> bool:
     if gear[0] != 1 or any(gear[1:]) or actuator.dyntype != mujoco.mjtDyn.mjDYN_NONE:
         return False
     ctrlrange, limited = [float(v) for v in actuator.ctrlrange], actuator.ctrllimited
+    _make_plugin_actuator(spec, actuator, instance, [1.0] + [0.0] * 9)
+    actuator.ctrllimited, actuator.ctrlrange = limited, ctrlrange
+    return True
+
+
+def _make_plugin_actuator(spec: mujoco.MjSpec, actuator: Any, instance: str, dynprm: list[float]) -> None:
+    """Make ``actuator`` a plugin actuator of ``instance`` in the main default class, in place.
+
+    No gain, bias or force range of its own remains (its force is the plugin's); its control range
+    is the caller's to set.
+    """
+    import mujoco
+
     actuator.classname = spec.default
     actuator.plugin.plugin_name = PLUGIN_NAME
     actuator.plugin.name = instance
@@ -200,12 +214,10 @@ def convert_channel(spec: mujoco.MjSpec, index: int, *, instance: str) -> bool:
     actuator.gainprm = [1.0] + [0.0] * 9
     actuator.biastype = mujoco.mjtBias.mjBIAS_NONE
     actuator.biasprm = [0.0] * 10
-    actuator.dynprm = [1.0] + [0.0] * 9
+    actuator.dynprm = dynprm
     actuator.actdim = -1
     actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
     actuator.forcerange = [0.0, 0.0]
-    actuator.ctrllimited, actuator.ctrlrange = limited, ctrlrange
-    return True
 
 
 def _joint_range(spec: mujoco.MjSpec, joint: str) -> tuple[float, float] | None:
@@ -291,22 +303,11 @@ def convert_actuator(
         )
         ctrlrange = [0.0, 0.0] if joint_range is None else list(joint_range)
     _warn_tighter_force_range(spec, actuator, index, dynprm[0], where)
-    actuator.classname = spec.default
+    _make_plugin_actuator(spec, actuator, instance, dynprm)
     actuator.name = name
-    actuator.plugin.plugin_name = PLUGIN_NAME
-    actuator.plugin.name = instance
-    actuator.plugin.active = True
-    actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-    actuator.gainprm = [1.0] + [0.0] * 9
-    actuator.biastype = mujoco.mjtBias.mjBIAS_NONE
-    actuator.biasprm = [0.0] * 10
     actuator.dyntype = mujoco.mjtDyn.mjDYN_NONE
-    actuator.actdim = -1
     # an activation range without activation dynamics fails MuJoCo's compile (intvelocity's)
     actuator.actlimited, actuator.actrange = mujoco.mjtLimited.mjLIMITED_FALSE, [0.0, 0.0]
-    actuator.dynprm = dynprm
-    actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
-    actuator.forcerange = [0.0, 0.0]
     actuator.ctrllimited = limited
     actuator.ctrlrange = ctrlrange
     actuator.inheritrange = 0.0  # the range is explicit now (a class's inheritrange must not redo it)

@@ -27,6 +27,15 @@ _TARGETS = {
 """Input -> (``set_targets`` argument, revolute SI unit, prismatic SI unit)."""
 
 
+def read_number(value: object, unit: str, where: str) -> float:
+    """A value given to a model-side call in SI [``unit``]: a real number, or a string with units."""
+    if isinstance(value, str):
+        return read_quantity(value, unit, where)
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return float(value)
+    raise InputError(f"{where}: expected a number [{unit}] or a string with units, got {value!r}")
+
+
 @dataclass(frozen=True, kw_only=True, slots=True)
 class MjDrive:
     """A drive added by :func:`add_drive`: the names to find it in the compiled model."""
@@ -80,12 +89,7 @@ class MjDrive:
         argument, revolute, prismatic = _TARGETS[name]
         unit = revolute if self.envelope.joint == "revolute" else prismatic
         where = f"drive {self.name!r}: set_targets: argument {argument!r}"
-        if isinstance(value, str):
-            number = read_quantity(value, unit, where)
-        elif isinstance(value, numbers.Real) and not isinstance(value, bool):
-            number = float(value)
-        else:
-            raise InputError(f"{where}: expected a number [{unit}] or a string with units, got {value!r}")
+        number = read_number(value, unit, where)
         # MuJoCo would take a NaN or inf control, warn once and zero every control of the model
         if not math.isfinite(number):
             raise InputError(f"{where} = {value!r}: expected a finite target [{unit}]")

@@ -21,12 +21,13 @@ import math
 import os
 import re
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.adapters.mujoco.existing import (
+    PLUGIN_NAME,
     describe_kind,
     feed_forward_motor,
     joint_actuators,
@@ -39,8 +40,6 @@ from drive_envelope._src.io.paths import input_file
 
 if TYPE_CHECKING:
     import mujoco
-
-PLUGIN_NAME = "drive_envelope.envelope"
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -99,15 +98,18 @@ def load_spec(path: str | os.PathLike[str]) -> mujoco.MjSpec:
 
 
 @contextlib.contextmanager
-def mujoco_warnings() -> Iterator[None]:
+def mujoco_warnings(handler: Callable[[str], None] | None = None) -> Iterator[None]:
     """Turn MuJoCo's warnings (``mju_warning``, e.g. the plugin's) into Python warnings meanwhile.
 
     MuJoCo prints them on stdout; the command line prints Python warnings as one stderr line each.
+    A ``handler`` takes each message instead (``lambda message: None`` drops them).
     """
     import mujoco
 
     previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda message: warnings.warn(" ".join(str(message).split()), stacklevel=2))
+    mujoco.set_mju_user_warning(
+        handler or (lambda message: warnings.warn(" ".join(str(message).split()), stacklevel=2))
+    )
     try:
         yield
     finally:
@@ -287,7 +289,7 @@ def _flag_gains(
         InputError: a value that is not a number with a gain's unit, or outside [0, 1e12], naming
             the flag and the value as given.
     """
-    from drive_envelope._src.adapters.mujoco.spec import gain_units
+    from drive_envelope._src.adapters.mujoco.params import gain_units
     from drive_envelope._src.values import read_quantity
 
     gains: list[float | None] = []

@@ -26,12 +26,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypeAlias
 
-from drive_envelope._src.adapters.mujoco.handle import MjDrive
+from drive_envelope._src.adapters.mujoco.handle import MjDrive, read_number
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope._src.values import read_quantity
 
 if TYPE_CHECKING:
     import mujoco
@@ -95,6 +94,15 @@ def _checked(value: float, label: str, unit: str, where: str, *, unlimited: bool
     return number
 
 
+def gain_units(joint: str, drive_type: DriveType) -> tuple[str, str]:
+    """SI units of (stiffness, damping) for a ``"revolute"`` or ``"prismatic"`` joint and a drive type."""
+    if drive_type == "acceleration":
+        return "1/s**2", "1/s"
+    if joint == "revolute":
+        return "N*m/rad", "N*m*s/rad"
+    return "N/m", "N*s/m"
+
+
 def drive_dynprm(
     envelope: PerformanceEnvelope, *, stiffness: float, damping: float, where: str = "drive"
 ) -> list[float]:
@@ -114,9 +122,9 @@ def drive_dynprm(
         _checked(getattr(envelope, name), name, si_unit(name, joint), where, unlimited=index < 2)
         for index, name in enumerate(DYNPRM_SLOTS[:4])
     ]
-    gain_units = ("N*m/rad", "N*m*s/rad") if joint == "revolute" else ("N/m", "N*s/m")
-    values.append(_checked(stiffness, "stiffness", gain_units[0], where, unlimited=False))
-    values.append(_checked(damping, "damping", gain_units[1], where, unlimited=False))
+    k_unit, c_unit = gain_units(joint, "force")
+    values.append(_checked(stiffness, "stiffness", k_unit, where, unlimited=False))
+    values.append(_checked(damping, "damping", c_unit, where, unlimited=False))
     return values + [0.0] * (NDYN - len(values))
 
 
@@ -188,16 +196,13 @@ def _info(
 
     first = actuators[0]
     raw = tuple(float(v) for v in model.actuator_dynprm[first, :6])
-    kind: JointType = (
-        "prismatic" if int(model.jnt_type[joint]) == int(mujoco.mjtJoint.mjJNT_SLIDE) else "revolute"
-    )
     try:
         envelope: PerformanceEnvelope | None = PerformanceEnvelope(
             max_effort=math.inf if raw[0] == NO_LIMIT else raw[0],
             max_actuator_velocity=math.inf if raw[1] == NO_LIMIT else raw[1],
             velocity_dependent_resistance=raw[2],
             speed_effort_gradient=raw[3],
-            joint=kind,
+            joint=_joint_type(model, first),
             name=_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, first),
         )
     except InputError:
@@ -336,7 +341,7 @@ def set_envelope(model: mujoco.MjModel, actuator: DriveRef, envelope: Performanc
     where = f"set_envelope(actuator={drive_label(actuator)})"
     info = find_drive(model, actuator, "set_envelope")
     env = resolve_envelope(envelope, where=f"{where}: argument 'envelope'")
-    kind = _joint_kind(model, info)
+    kind = _joint_type(model, info.actuator)
     if env.joint != kind:
         raise InputError(f"{where}: the envelope is for a {env.joint} joint but {info.joint!r} is {kind}")
     values = drive_dynprm(env, stiffness=info.stiffness, damping=info.damping, where=where)
@@ -366,14 +371,11 @@ def set_gains(
     """
     where = f"set_gains(actuator={drive_label(actuator)})"
     info = find_drive(model, actuator, "set_gains")
-    if info.drive_type == "acceleration":
-        units = ("1/s**2", "1/s")
-    elif _joint_kind(model, info) == "revolute":
-        units = ("N*m/rad", "N*m*s/rad")
-    else:
-        units = ("N/m", "N*s/m")
+    units = gain_units(_joint_type(model, info.actuator), info.drive_type)
     slots = {
-        slot: _checked(_gain(value, label, unit, where), label, unit, where, unlimited=False)
+        slot: _checked(
+            read_number(value, unit, f"{where}: argument {label!r}"), label, unit, where, unlimited=False
+        )
         for slot, label, value, unit in (
             (4, "stiffness", stiffness, units[0]),
             (5, "damping", damping, units[1]),
@@ -382,17 +384,6 @@ def set_gains(
     }
     for slot, number in slots.items():  # both checked first
         model.actuator_dynprm[info.actuator, slot] = number
-
-
-def _gain(value: object, label: str, unit: str, where: str) -> float:
-    """A gain given to :func:`set_gains` in SI: a real number, or a string read with its units."""
-    if isinstance(value, str):
-        return read_quantity(value, unit, f"{where}: argument {label!r}")
-    if isinstance(value, numbers.Real) and not isinstance(value, bool):
-        return float(value)
-    raise InputError(
-        f"{where}: argument {label!r}: expected a number [{unit}] or a string with units, got {value!r}"
-    )
 
 
 def get_envelope(model: mujoco.MjModel, actuator: DriveRef) -> PerformanceEnvelope:
@@ -414,8 +405,9 @@ def get_gains(model: mujoco.MjModel, actuator: DriveRef) -> tuple[float, float]:
     return info.stiffness, info.damping
 
 
-def _joint_kind(model: mujoco.MjModel, info: MjDriveInfo) -> JointType:
+def _joint_type(model: mujoco.MjModel, actuator: int) -> JointType:
+    """``"prismatic"`` if actuator ``actuator`` of ``model`` drives a slide joint, else ``"revolute"``."""
     import mujoco
 
-    joint = int(model.actuator_trnid[info.actuator, 0])
+    joint = int(model.actuator_trnid[actuator, 0])
     return "prismatic" if int(model.jnt_type[joint]) == int(mujoco.mjtJoint.mjJNT_SLIDE) else "revolute"

@@ -54,7 +54,7 @@ def joint_ratings(model: mujoco.MjModel, joints: Sequence[str]) -> dict[str, Rat
     """
     import mujoco
 
-    from drive_envelope._src.adapters.mujoco.existing import gain_kind
+    from drive_envelope._src.adapters.mujoco.existing import compiled_gain_kind
 
     ratings = {}
     for joint in joints:
@@ -77,13 +77,7 @@ def joint_ratings(model: mujoco.MjModel, joints: Sequence[str]) -> dict[str, Rat
             if bool(model.actuator_forcelimited[i]):
                 force = _tighter(*(float(v) for v in model.actuator_forcerange[i]))
                 candidates.append((force * gear, f"forcerange of {name!r}"))
-            kind = gain_kind(
-                int(model.actuator_gaintype[i]),
-                int(model.actuator_biastype[i]),
-                [float(v) for v in model.actuator_gainprm[i]],
-                [float(v) for v in model.actuator_biasprm[i]],
-            )[0]
-            if kind == "motor" and bool(model.actuator_ctrllimited[i]):
+            if compiled_gain_kind(model, i)[0] == "motor" and bool(model.actuator_ctrllimited[i]):
                 torque = _tighter(*(float(v) for v in model.actuator_ctrlrange[i]))
                 gain = abs(float(model.actuator_gainprm[i, 0]))
                 candidates.append((torque * gain * gear, f"ctrlrange of motor {name!r}"))

@@ -30,7 +30,8 @@ from drive_envelope._src.adapters.mujoco.existing import (
     update_keyframes,
 )
 from drive_envelope._src.adapters.mujoco.handle import MjDrive
-from drive_envelope._src.adapters.mujoco.params import drive_dynprm
+from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME
+from drive_envelope._src.adapters.mujoco.params import drive_dynprm, gain_units
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
@@ -41,7 +42,6 @@ if TYPE_CHECKING:
 
 INPUTS = ("pos", "vel", "ff")
 """Control inputs in canonical order: target position, target velocity, feed-forward effort."""
-PLUGIN_NAME = "drive_envelope.envelope"
 
 
 def plugin_config(*, drive_type: DriveType = "force", inputs: Sequence[str] = ("pos",)) -> dict[str, str]:
@@ -84,15 +84,6 @@ def _resolve_envelope(
         return resolve_envelope(envelope, where="add_drive: argument 'envelope'")
     assert datasheet is not None
     return resolve_envelope(datasheet, where="add_drive: argument 'datasheet'")
-
-
-def gain_units(joint: str, drive_type: DriveType) -> tuple[str, str]:
-    """SI units of (stiffness, damping) for a ``"revolute"`` or ``"prismatic"`` joint and a drive type."""
-    if drive_type == "acceleration":
-        return "1/s**2", "1/s"
-    if joint == "revolute":
-        return "N*m/rad", "N*m*s/rad"
-    return "N/m", "N*s/m"
 
 
 def add_drive(

@@ -33,13 +33,13 @@ drive never sees the frictionloss, so a drive against Coulomb friction differs (
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME
+from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
 from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import NO_LIMIT_FIELDS, PerformanceEnvelope
@@ -47,7 +47,7 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 from drive_envelope._src.scenario.schedule import DriveSchedule
-from drive_envelope._src.scenario.spec import JointSpec, Scenario
+from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -75,7 +75,7 @@ def _plugin_envelope(scenario: Scenario) -> tuple[PerformanceEnvelope, float, fl
     return envelope, drive.stiffness, drive.damping, False
 
 
-def _where(scenario: Scenario) -> str:
+def _where(scenario: Scenario | ChainScenario) -> str:
     return f"scenario {scenario.name!r}" if scenario.name else "scenario"
 
 
@@ -184,13 +184,7 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
     if schedule is not None:
         schedule.check_steps(scenario.simulation.steps, _where(scenario))
     spec, drive = stand_spec(scenario)
-    # MuJoCo resets a diverging simulation (|v| > 1e10) and goes on: stop with an error instead
-    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
-    try:
-        model = spec.compile()
-    except ValueError as exc:
-        detail = " ".join(str(exc).split())
-        raise InputError(f"{_where(scenario)}: MuJoCo cannot build the test stand: {detail}") from None
+    model = _compile(spec, f"{_where(scenario)}: MuJoCo cannot build the test stand")
     data = mujoco.MjData(model)
     data.qpos[0] = scenario.joint.initial_position
     data.qvel[0] = scenario.joint.initial_velocity
@@ -206,12 +200,12 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
     time = np.arange(count + 1, dtype=np.float64) * scenario.simulation.dt
     position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
     position[0], velocity[0] = data.qpos[0], data.qvel[0]
-    with _quiet_warnings():
+    with mujoco_warnings(_drop):
         for i in range(1, count + 1):
             if schedule is not None:
                 _command(model, data, drive, scenario, schedule, i - 1)
             mujoco.mj_step(model, data)
-            _raise_on_warning(scenario, data, i)
+            _raise_on_warning(_where(scenario), data, i)
             position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
     return Trajectory(
         time=time,
@@ -248,20 +242,23 @@ def _command(
         set_gains(model, drive.name, stiffness=stiffness * powered, damping=damping * powered)
 
 
-@contextlib.contextmanager
-def _quiet_warnings() -> Iterator[None]:
-    """Keep MuJoCo from printing its own warning line: the per-step check reports it as one error."""
+def _compile(spec: mujoco.MjSpec, failure: str) -> mujoco.MjModel:
+    """``spec`` compiled to stop at a diverging step; a compile error is ``failure: MuJoCo's message``."""
     import mujoco
 
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda message: None)
+    # MuJoCo resets a diverging simulation (|v| > 1e10) and goes on: stop with an error instead
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     try:
-        yield
-    finally:
-        mujoco.set_mju_user_warning(previous)
+        return spec.compile()
+    except ValueError as exc:
+        raise InputError(f"{failure}: {' '.join(str(exc).split())}") from None
 
 
-def _raise_on_warning(scenario: Scenario, data: mujoco.MjData, step: int) -> None:
+def _drop(message: str) -> None:
+    """Keep MuJoCo from printing its own warning line: the per-step check reports it as one error."""
+
+
+def _raise_on_warning(where: str, data: mujoco.MjData, step: int) -> None:
     """Stop at the first step MuJoCo flagged (a NaN or a value above 1e10 in its state)."""
     import mujoco
 
@@ -270,7 +267,7 @@ def _raise_on_warning(scenario: Scenario, data: mujoco.MjData, step: int) -> Non
         if stat.number > 0:
             text = mujoco.mju_warningText(int(getattr(mujoco.mjtWarning, name)), int(stat.lastinfo))
             raise InputError(
-                f"{_where(scenario)}: MuJoCo stopped at step {step} (t = {data.time:.6g} s): "
+                f"{where}: MuJoCo stopped at step {step} (t = {data.time:.6g} s): "
                 f"{text.rstrip('.')} (the state diverged: check dt, inertia, gains and loads)"
             )
 
@@ -284,7 +281,7 @@ def _metadata(scenario: Scenario) -> dict[str, object]:
         "plugin_solver": sim.solver,
         "mujoco_version": str(mujoco.__version__),
         "integrator": "Euler",
-        "plugin": "drive_envelope.envelope",
+        "plugin": PLUGIN_NAME,
         "unlimited_effort": math.isinf(scenario.drive.max_effort),
     }
 
@@ -367,12 +364,7 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
     import mujoco
 
     spec, drives = chain_spec(scenario)
-    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
-    where = f"scenario {scenario.name!r}" if scenario.name else "scenario"
-    try:
-        model = spec.compile()
-    except ValueError as exc:
-        raise InputError(f"{where}: MuJoCo cannot build the chain: {' '.join(str(exc).split())}") from None
+    model = _compile(spec, f"{_where(scenario)}: MuJoCo cannot build the chain")
     data = mujoco.MjData(model)
     joints = scenario.joints
     qpos = [int(model.jnt_qposadr[model.joint(j.name).id]) for j in joints]
@@ -386,11 +378,10 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
     position, velocity, effort = np.zeros((count + 1, n)), np.zeros((count + 1, n)), np.zeros((count + 1, n))
     position[0], velocity[0] = data.qpos[qpos], data.qvel[dof]
     actuators = [model.actuator(drive.name).id for drive in drives]
-    proxy = Scenario(joint=JointSpec(inertia=1.0), name=scenario.name)  # names the scenario in errors
-    with _quiet_warnings():
+    with mujoco_warnings(_drop):
         for i in range(1, count + 1):
             mujoco.mj_step(model, data)
-            _raise_on_warning(proxy, data, i)
+            _raise_on_warning(_where(scenario), data, i)
             position[i], velocity[i], effort[i] = (
                 data.qpos[qpos],
                 data.qvel[dof],
@@ -410,7 +401,7 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
             **sim.metadata(),
             "mujoco_version": str(mujoco.__version__),
             "integrator": "Euler",
-            "plugin": "drive_envelope.envelope",
+            "plugin": PLUGIN_NAME,
             "plugin_solver": sim.solver,
             "effort_source": "the plugin's actuator force (drive + applied effort)",
         },
