@@ -42,12 +42,12 @@ from drive_envelope._src.adapters.mujoco.loader import PLUGIN_NAME
 from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
 from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
-from drive_envelope._src.envelope.model import NO_LIMIT_FIELDS, PerformanceEnvelope
+from drive_envelope._src.envelope.model import NO_LIMIT_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
 from drive_envelope._src.scenario.schedule import DriveSchedule
-from drive_envelope._src.scenario.spec import Scenario
+from drive_envelope._src.scenario.spec import DriveSpec, Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -58,21 +58,39 @@ MIN_INERTIA = 1e-15
 _WARNINGS = ("mjWARN_INERTIA", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL")
 
 
-def _plugin_envelope(scenario: Scenario) -> tuple[PerformanceEnvelope, float, float, bool]:
-    """Envelope, stiffness, damping and "no effort limit" the plugin gets for the scenario's drive.
+def _plugin_envelope(
+    drive: DriveSpec, envelope: PerformanceEnvelope | None, joint: JointType
+) -> tuple[PerformanceEnvelope, float, float, bool]:
+    """Envelope, stiffness, damping and "no effort limit" the plugin gets for a stand's drive.
 
     PhysX's drive with ``maxForce = 0`` is off and leaves the applied effort unlimited: the plugin
     gets zero gains and no limit, so its output is the feed-forward alone. Without an effort limit
-    (PhysX skips the clamp) the plugin gets ``max_effort = -1`` (no limit).
+    (``envelope`` None: PhysX skips the clamp) the plugin gets ``max_effort = -1`` (no limit).
     """
-    drive = scenario.drive
-    unlimited = PerformanceEnvelope(max_effort=0.0, joint=scenario.joint.type)
+    unlimited = PerformanceEnvelope(max_effort=0.0, joint=joint)
     if drive.max_effort == 0.0:
         return unlimited, 0.0, 0.0, True
-    envelope = scenario.effective_envelope()
     if envelope is None:
         return unlimited, drive.stiffness, drive.damping, True
     return envelope, drive.stiffness, drive.damping, False
+
+
+def _add_stand_drive(
+    spec: mujoco.MjSpec,
+    joint: str,
+    name: str,
+    drive: DriveSpec,
+    envelope: PerformanceEnvelope | None,
+    joint_type: JointType,
+) -> MjDrive:
+    """The plugin drive of a stand's ``joint`` with all three inputs, as :func:`_plugin_envelope` says."""
+    limit, k, c, unlimited = _plugin_envelope(drive, envelope, joint_type)
+    added = add_drive(spec, joint, envelope=limit, stiffness=k, damping=c, drive_type=drive.type,
+                      inputs=("pos", "vel", "ff"), name=name, effort_sensor=False)  # fmt: skip
+    if unlimited:
+        actuator = spec.actuator(added.name)
+        actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
+    return added
 
 
 def _where(scenario: Scenario | ChainScenario) -> str:
@@ -146,21 +164,8 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
     joint.frictionloss = friction.dynamic_friction
     joint.solref_friction = [2.0 * dt, 1.0]
     joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
-    envelope, stiffness, damping, unlimited = _plugin_envelope(scenario)
-    drive = add_drive(
-        spec,
-        "joint",
-        envelope=envelope,
-        stiffness=stiffness,
-        damping=damping,
-        drive_type=scenario.drive.type,
-        inputs=("pos", "vel", "ff"),
-        name="drive",
-        effort_sensor=False,
-    )
-    if unlimited:
-        actuator = spec.actuator(drive.name)
-        actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
+    envelope = scenario.effective_envelope()
+    drive = _add_stand_drive(spec, "joint", "drive", scenario.drive, envelope, scenario.joint.type)
     sim = scenario.simulation
     set_solver(spec, sim.solver, position_iterations=sim.position_iterations,
                velocity_iterations=sim.velocity_iterations)  # fmt: skip
@@ -238,8 +243,8 @@ def _command(
     )
     powered = bool(schedule.enabled[index])
     if (get_gains(model, drive.name) != (0.0, 0.0)) != powered:
-        _, stiffness, damping, _ = _plugin_envelope(scenario)
-        set_gains(model, drive.name, stiffness=stiffness * powered, damping=damping * powered)
+        gains = _plugin_envelope(scenario.drive, scenario.effective_envelope(), scenario.joint.type)[1:3]
+        set_gains(model, drive.name, stiffness=gains[0] * powered, damping=gains[1] * powered)
 
 
 def _compile(spec: mujoco.MjSpec, failure: str) -> mujoco.MjModel:
@@ -333,23 +338,9 @@ def chain_spec(scenario: ChainScenario) -> tuple[mujoco.MjSpec, list[MjDrive]]:
         mj_joint.solref_friction = [2.0 * sim.dt, 1.0]
         mj_joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
         envelope = joint.effective_envelope()
-        unlimited = envelope is None or joint.drive.max_effort == 0.0
-        off = joint.drive.max_effort == 0.0
-        drive = add_drive(
-            spec,
-            joint.name,
-            envelope=envelope if not unlimited else PerformanceEnvelope(max_effort=0.0, joint=joint.type),
-            stiffness=0.0 if off else joint.drive.stiffness,
-            damping=0.0 if off else joint.drive.damping,
-            drive_type=joint.drive.type,
-            inputs=("pos", "vel", "ff"),
-            name=f"{joint.name}_drive",
-            effort_sensor=False,
+        drives.append(
+            _add_stand_drive(spec, joint.name, f"{joint.name}_drive", joint.drive, envelope, joint.type)
         )
-        if unlimited:
-            actuator = spec.actuator(drive.name)
-            actuator.dynprm = [NO_LIMIT, *list(actuator.dynprm)[1:]]
-        drives.append(drive)
     set_solver(spec, sim.solver, position_iterations=sim.position_iterations,
                velocity_iterations=sim.velocity_iterations)  # fmt: skip
     return spec, drives
