@@ -20,7 +20,7 @@ integrator).
 
 import warp as wp  # noqa: TID253 (imported only by kernels.py, itself imported lazily)
 
-from drive_envelope._src.adapters.mjwarp.solve import Layout, _finite
+from drive_envelope._src.adapters.mjwarp.solve import Layout, _finite, propagate
 from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_params
 
 wp.set_module_options({"fuse_fp": False})
@@ -33,14 +33,6 @@ TGS = 2
 _PASS_PGS = wp.constant(0)
 _PASS_SUBSTEP = wp.constant(1)
 _PASS_VELOCITY = wp.constant(2)
-
-
-@wp.func
-def _propagate(work: wp.array2d[wp.float64], lay: Layout, w: int, r: int, impulse: wp.float64):
-    """An impulse on drive r moves every drive's velocity through A's column r (A is symmetric)."""
-    if impulse != wp.float64(0.0) and _finite(impulse):
-        for s in range(lay.n):
-            work[lay.v + s, w] = work[lay.v + s, w] + work[lay.a + r * lay.n + s, w] * impulse
 
 
 @wp.func
@@ -89,7 +81,7 @@ def _visit(
         delta = clamped - applied
         if _finite(delta):
             work[lay.x + r, w] = work[lay.x + r, w] + delta
-            _propagate(work, lay, w, r, delta)
+            propagate(work, lay, w, r, delta)
 
 
 @wp.func
@@ -138,7 +130,7 @@ def articulation(
         work[lay.v + r, w] = work[lay.vfree + r, w]
     for r in range(n):
         if iwork[lay.active + r, w] != 0:
-            _propagate(work, lay, w, r, work[lay.ff + r, w] * h)
+            propagate(work, lay, w, r, work[lay.ff + r, w] * h)
     sweeps = wp.int32(0)  # a dynamic variable: Warp refuses to mutate a literal in loops
     if not tgs:
         velocity = wp.max(velocity_iterations, 1)  # PhysX's PGS always runs a last velocity sweep

@@ -12,6 +12,7 @@ makes no host synchronization and records into a CUDA graph.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -42,7 +43,7 @@ class EnvelopeDrives:
     def __init__(self, table: DriveTable, mj_model: Any, model: Any, *, specs: tuple[Any, ...] = ()) -> None:
         import warp as wp
 
-        from drive_envelope._src.adapters.mjwarp import solve
+        from drive_envelope._src.adapters.mjwarp import kernels, solve
 
         self.table = table
         """The drives, in DOF order (:class:`DriveTable`)."""
@@ -55,26 +56,12 @@ class EnvelopeDrives:
         device = model.opt.timestep.device
         self._device = device
 
-        def put(values: np.ndarray) -> Any:
-            return wp.array(
-                np.ascontiguousarray(values, dtype=np.int32).ravel(), dtype=wp.int32, device=device
-            )
-
-        self._arrays = {
-            "dof": put(table.dof),
-            "qpos": put(table.qpos),
-            "actuator": put(table.actuator),
-            "inputs": put(table.inputs),
-            "accel": put(table.acceleration),
-            "enabled": put(table.enabled),
-            "input_enabled": put(table.input_enabled),
-            "delayed": put(table.delayed),
-            "outputs": put(table.outputs),
-            "native": put(table.native),
-            "damping_adr": put(table.damping_adr),
-            "damping_num": put(table.damping_num),
-            "damping_actuator": put(table.damping_actuator),
-        }
+        self._drives = kernels.DriveArrays()
+        for field in dataclasses.fields(table):  # every array of the table, flattened, by its name
+            values = getattr(table, field.name)
+            if isinstance(values, np.ndarray):
+                flat = np.ascontiguousarray(values, dtype=np.int32).ravel()
+                setattr(self._drives, field.name, wp.array(flat, dtype=wp.int32, device=device))
         n, nv = table.count, int(mj_model.nv)
         nc = int(np.sum(mj_model.M_rownnz))  # entries of M in MuJoCo's sparse layout (MJWarp's d.M)
         self._layout, self._nwork, self._niwork = _layout(solve.Layout, n, nv, nc)
@@ -156,7 +143,7 @@ class EnvelopeDrives:
 
         from drive_envelope._src.adapters.mjwarp import kernels
 
-        nworld, device, arrays = d.nworld, self._device, self._arrays
+        nworld, device = d.nworld, self._device
         delayed = self._no_delay
         if self.table.delayed_actuators:
             delayed = wp.empty((len(self.table.delayed_actuators), nworld), dtype=wp.float32, device=device)
@@ -170,7 +157,7 @@ class EnvelopeDrives:
             inputs=[
                 m.dof_jntid,
                 m.jnt_actgravcomp,
-                arrays["native"],
+                self._drives.native,
                 not flags & DisableBit.GRAVITY,
                 d.qfrc_passive,
                 d.qfrc_bias,
@@ -228,18 +215,7 @@ class EnvelopeDrives:
                 self._field(m, "actuator_damping"),
                 self._field(m, "actuator_dampingpoly"),
                 m.actuator_gear,
-                arrays["dof"],
-                arrays["qpos"],
-                arrays["actuator"],
-                arrays["inputs"],
-                arrays["accel"],
-                arrays["enabled"],
-                arrays["input_enabled"],
-                arrays["delayed"],
-                arrays["outputs"],
-                arrays["damping_adr"],
-                arrays["damping_num"],
-                arrays["damping_actuator"],
+                self._drives,
                 not flags & DisableBit.CLAMPCTRL,
                 implicit_damping(flags, int(m.opt.integrator)),
                 tracked,

@@ -34,6 +34,25 @@ _MINVAL = wp.constant(wp.float64(1e-15))  # MuJoCo's mjMINVAL
 _INF = wp.constant(wp.float64(float("inf")))
 
 
+@wp.struct
+class DriveArrays:
+    """The drive table on the device: :class:`.structure.DriveTable`'s arrays by their names (int32)."""
+
+    dof: wp.array[wp.int32]
+    qpos: wp.array[wp.int32]
+    actuator: wp.array[wp.int32]
+    inputs: wp.array[wp.int32]  # 3 per drive, as all the (ndrive, 3) tables
+    acceleration: wp.array[wp.int32]
+    enabled: wp.array[wp.int32]
+    input_enabled: wp.array[wp.int32]
+    delayed: wp.array[wp.int32]
+    outputs: wp.array[wp.int32]
+    native: wp.array[wp.int32]
+    damping_adr: wp.array[wp.int32]
+    damping_num: wp.array[wp.int32]
+    damping_actuator: wp.array[wp.int32]
+
+
 @wp.kernel(enable_backward=False)
 def _smooth_force_kernel(
     dof_jntid: wp.array[int],
@@ -139,9 +158,7 @@ def _damping_derivative(
     actuator_damping: wp.array2d[float],
     actuator_dampingpoly: wp.array2d[wp.vec2],
     actuator_gear: wp.array2d[wp.spatial_vector],
-    damping_adr: wp.array[wp.int32],
-    damping_num: wp.array[wp.int32],
-    damping_actuator: wp.array[wp.int32],
+    drives: DriveArrays,
     qvel: wp.array2d[float],
     w: int,
     i: int,
@@ -154,8 +171,8 @@ def _damping_derivative(
     poly = dof_dampingpoly[w % dof_dampingpoly.shape[0], i]
     p0 = wp.float64(poly[0])
     p1 = wp.float64(poly[1])
-    for k in range(damping_num[i]):
-        a = damping_actuator[damping_adr[i] + k]
+    for k in range(drives.damping_num[i]):
+        a = drives.damping_actuator[drives.damping_adr[i] + k]
         gear = wp.float64(actuator_gear[w % actuator_gear.shape[0], a][0])
         scale = gear * gear
         damping += wp.float64(actuator_damping[w % actuator_damping.shape[0], a]) * scale
@@ -234,12 +251,7 @@ def _read_requests(
     actuator_ctrladr: wp.array[int],
     actuator_ctrllimited: wp.array[bool],
     actuator_ctrlrange: wp.array2d[wp.vec2],
-    drive_qpos: wp.array[wp.int32],
-    drive_actuator: wp.array[wp.int32],
-    drive_inputs: wp.array[wp.int32],
-    drive_enabled: wp.array[wp.int32],
-    input_enabled: wp.array[wp.int32],
-    drive_delayed: wp.array[wp.int32],
+    drives: DriveArrays,
     clampctrl: bool,
     qpos: wp.array2d[float],
     ctrl: wp.array2d[float],
@@ -261,8 +273,8 @@ def _read_requests(
     for k in range(lay.n):
         iwork[lay.active + k, w] = 0
         work[lay.effort + k, w] = zero
-        if drive_enabled[k] != 0:
-            prm = actuator_dynprm[w % actuator_dynprm.shape[0], drive_actuator[k]]
+        if drives.enabled[k] != 0:
+            prm = actuator_dynprm[w % actuator_dynprm.shape[0], drives.actuator[k]]
             ok = wp.bool(True)
             for s in range(6):
                 value, good = _slot(prm[s], s < 2)
@@ -273,8 +285,8 @@ def _read_requests(
             if ok:
                 u0, u1, u2 = zero, zero, zero
                 for s in range(3):
-                    a = drive_inputs[3 * k + s]
-                    if a >= 0 and input_enabled[3 * k + s] != 0:
+                    a = drives.inputs[3 * k + s]
+                    if a >= 0 and drives.input_enabled[3 * k + s] != 0:
                         u = _control(
                             ctrl,
                             delayed,
@@ -284,7 +296,7 @@ def _read_requests(
                             clampctrl,
                             w,
                             a,
-                            drive_delayed[3 * k + s],
+                            drives.delayed[3 * k + s],
                         )
                         bad = bad or _bad(u)
                         if s == 0:
@@ -293,7 +305,7 @@ def _read_requests(
                             u1 = u
                         else:
                             u2 = u
-                work[lay.err + k, w] = u0 - wp.float64(qpos[w, drive_qpos[k]])
+                work[lay.err + k, w] = u0 - wp.float64(qpos[w, drives.qpos[k]])
                 work[lay.tvel + k, w] = u1
                 work[lay.ff + k, w] = u2
                 iwork[lay.active + k, w] = 1
@@ -302,7 +314,7 @@ def _read_requests(
         bad = bad or _bad(wp.float64(ctrl[w, i]))
     if bad:
         for k in range(lay.n):
-            work[lay.err + k, w] = -wp.float64(qpos[w, drive_qpos[k]])
+            work[lay.err + k, w] = -wp.float64(qpos[w, drives.qpos[k]])
             work[lay.tvel + k, w] = zero
             work[lay.ff + k, w] = zero
     return any_active
@@ -357,18 +369,7 @@ def _drive_kernel(
     actuator_damping: wp.array2d[float],
     actuator_dampingpoly: wp.array2d[wp.vec2],
     actuator_gear: wp.array2d[wp.spatial_vector],
-    drive_dof: wp.array[wp.int32],
-    drive_qpos: wp.array[wp.int32],
-    drive_actuator: wp.array[wp.int32],
-    drive_inputs: wp.array[wp.int32],
-    drive_accel: wp.array[wp.int32],
-    drive_enabled: wp.array[wp.int32],
-    input_enabled: wp.array[wp.int32],
-    drive_delayed: wp.array[wp.int32],
-    drive_outputs: wp.array[wp.int32],
-    damping_adr: wp.array[wp.int32],
-    damping_num: wp.array[wp.int32],
-    damping_actuator: wp.array[wp.int32],
+    drives: DriveArrays,
     clampctrl: bool,
     implicit_damping: bool,
     track: bool,
@@ -395,6 +396,7 @@ def _drive_kernel(
     """
     w = wp.tid()
     n = lay.n
+    accel = drives.acceleration
     h = wp.float64(opt_timestep[w % opt_timestep.shape[0]])
     iterations = wp.int32(0)
     iwork[lay.solves, w] = 0
@@ -406,12 +408,7 @@ def _drive_kernel(
             actuator_ctrladr,
             actuator_ctrllimited,
             actuator_ctrlrange,
-            drive_qpos,
-            drive_actuator,
-            drive_inputs,
-            drive_enabled,
-            input_enabled,
-            drive_delayed,
+            drives,
             clampctrl,
             qpos,
             ctrl,
@@ -433,9 +430,7 @@ def _drive_kernel(
                     actuator_damping,
                     actuator_dampingpoly,
                     actuator_gear,
-                    damping_adr,
-                    damping_num,
-                    damping_actuator,
+                    drives,
                     qvel,
                     w,
                     i,
@@ -447,7 +442,7 @@ def _drive_kernel(
         _back_substitute(work, lay, M_rownnz, M_rowadr, M_colind, w, lay.y, lay.nv - 1)
         for r in range(n):
             z = lay.z + r * lay.nv
-            dof = drive_dof[r]
+            dof = drives.dof[r]
             for i in range(dof + 1):
                 work[z + i, w] = wp.float64(0.0)
             work[z + dof, w] = wp.float64(1.0)
@@ -455,15 +450,15 @@ def _drive_kernel(
             work[lay.vfree + r, w] = wp.float64(qvel[w, dof]) + h * _dot_dinv(work, lay, w, z, lay.y, dof)
         for r in range(n):
             for s in range(r, n):
-                entry = _dot_dinv(work, lay, w, lay.z + r * lay.nv, lay.z + s * lay.nv, drive_dof[r])
+                entry = _dot_dinv(work, lay, w, lay.z + r * lay.nv, lay.z + s * lay.nv, drives.dof[r])
                 work[lay.a + r * n + s, w] = entry
                 work[lay.a + s * n + r, w] = entry
         if solver_kind == 0:
-            _prepare(work, iwork, lay, drive_accel, w, h)
-            iterations = solve_drives(work, iwork, lay, drive_accel, w, h)
+            _prepare(work, iwork, lay, accel, w, h)
+            iterations = solve_drives(work, iwork, lay, accel, w, h)
         else:  # PhysX's PGS or TGS iteration (drive_envelope_solver numeric)
             for r in range(n):
-                work[lay.qvel + r, w] = wp.float64(qvel[w, drive_dof[r]])
+                work[lay.qvel + r, w] = wp.float64(qvel[w, drives.dof[r]])
                 work[lay.bias + r, w] = wp.float64(0.0)
             if solver_kind == 2:  # TGS: the bias's share of vfree, applied before the substeps
                 for i in range(lay.nv):
@@ -471,17 +466,17 @@ def _drive_kernel(
                 _back_substitute(work, lay, M_rownnz, M_rowadr, M_colind, w, lay.y, lay.nv - 1)
                 for r in range(n):
                     z = lay.z + r * lay.nv
-                    work[lay.bias + r, w] = h * _dot_dinv(work, lay, w, z, lay.y, drive_dof[r])
+                    work[lay.bias + r, w] = h * _dot_dinv(work, lay, w, z, lay.y, drives.dof[r])
             iterations = articulation(
-                work, iwork, lay, drive_accel, w, h, solver_kind, position_iterations, velocity_iterations
+                work, iwork, lay, accel, w, h, solver_kind, position_iterations, velocity_iterations
             )
     for k in range(n):
         for s in range(3):
-            a = drive_outputs[3 * k + s]
+            a = drives.outputs[3 * k + s]
             if a >= 0:
                 actuator_force[w, a] = 0.0
         if iwork[lay.active + k, w] != 0:
-            actuator_force[w, drive_actuator[k]] = wp.float32(work[lay.effort + k, w])
+            actuator_force[w, drives.actuator[k]] = wp.float32(work[lay.effort + k, w])
     if track:
         stats[w, 0] = iterations
         stats[w, 1] = iwork[lay.solves, w]

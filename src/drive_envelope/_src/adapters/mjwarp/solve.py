@@ -239,16 +239,20 @@ def _track(
 
 
 @wp.func
+def propagate(work: wp.array2d[wp.float64], lay: Layout, w: int, r: int, impulse: wp.float64):
+    """An impulse on drive r moves every drive's velocity through A's column r (A is symmetric)."""
+    if impulse != wp.float64(0.0) and _finite(impulse):
+        for s in range(lay.n):
+            work[lay.v + s, w] = work[lay.v + s, w] + work[lay.a + r * lay.n + s, w] * impulse
+
+
+@wp.func
 def _velocities(work: wp.array2d[wp.float64], lay: Layout, w: int):
-    """The end-of-step velocities of the impulses: v = vfree + A*x."""
-    n = lay.n
-    for r in range(n):
+    """The end-of-step velocities of the (finite) impulses: v = vfree + A*x."""
+    for r in range(lay.n):
         work[lay.v + r, w] = work[lay.vfree + r, w]
-    for s in range(n):
-        xs = work[lay.x + s, w]
-        if xs != wp.float64(0.0):
-            for r in range(n):
-                work[lay.v + r, w] = work[lay.v + r, w] + work[lay.a + s * n + r, w] * xs
+    for r in range(lay.n):
+        propagate(work, lay, w, r, work[lay.x + r, w])
 
 
 @wp.func
