@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.adapters.mjwarp.model import envelope_drives
 from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, drive_dynprm
-from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
 Worlds = int | Sequence[int] | None
@@ -45,11 +45,11 @@ def _rows(batch: int, world: Worlds, where: str) -> npt.NDArray[np.intp]:
     return worlds.astype(np.intp)
 
 
-def _drive(m: Any, actuator: int | str, where: str) -> tuple[int, bool]:
-    """(effort actuator id, prismatic) of the drive that ``actuator`` names."""
+def _drive(m: Any, actuator: int | str, where: str) -> tuple[int, JointType]:
+    """(effort actuator id, joint type) of the drive that ``actuator`` names."""
     table = envelope_drives(m, where).table
     k = table.index(actuator, where)
-    return int(table.actuator[k]), table.prismatic[k]
+    return int(table.actuator[k]), "prismatic" if table.prismatic[k] else "revolute"
 
 
 def set_envelope(
@@ -70,9 +70,8 @@ def set_envelope(
     from drive_envelope._src.datasheet.resolve import resolve_envelope
 
     where = f"set_envelope(actuator={actuator!r})"
-    index, prismatic = _drive(m, actuator, where)
+    index, kind = _drive(m, actuator, where)
     env = resolve_envelope(envelope, where=f"{where}: argument 'envelope'")
-    kind = "prismatic" if prismatic else "revolute"
     if env.joint != kind:
         raise InputError(f"{where}: the envelope is for a {env.joint} joint but the drive's joint is {kind}")
     values = drive_dynprm(env, stiffness=0.0, damping=0.0, where=where)[:4]
@@ -102,8 +101,8 @@ def set_gains(
         InputError: no such drive, a gain outside ``[0, 1e12]``, or a bad world index.
     """
     where = f"set_gains(actuator={actuator!r})"
-    index, prismatic = _drive(m, actuator, where)
-    probe = PerformanceEnvelope(max_effort=1.0, joint="prismatic" if prismatic else "revolute")
+    index, kind = _drive(m, actuator, where)
+    probe = PerformanceEnvelope(max_effort=1.0, joint=kind)
     gains = drive_dynprm(probe, stiffness=_given(stiffness), damping=_given(damping), where=where)[4:6]
     table = m.actuator_dynprm.numpy().copy()
     rows = _rows(table.shape[0], world, where)
@@ -125,7 +124,7 @@ def get_envelope(m: Any, actuator: int | str, world: int = 0) -> PerformanceEnve
         InputError: no such drive, a bad world index, or numbers that are not an envelope.
     """
     where = f"get_envelope(actuator={actuator!r})"
-    index, prismatic = _drive(m, actuator, where)
+    index, kind = _drive(m, actuator, where)
     table = m.actuator_dynprm.numpy()
     row = table[int(_rows(table.shape[0], world, where)[0]), index].astype(np.float64)
     try:
@@ -134,7 +133,7 @@ def get_envelope(m: Any, actuator: int | str, world: int = 0) -> PerformanceEnve
             max_actuator_velocity=math.inf if row[1] == NO_LIMIT else row[1],
             velocity_dependent_resistance=row[2],
             speed_effort_gradient=row[3],
-            joint="prismatic" if prismatic else "revolute",
+            joint=kind,
         )
     except InputError:
         raise InputError(

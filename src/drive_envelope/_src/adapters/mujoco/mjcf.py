@@ -197,7 +197,7 @@ def apply_drives(
         InputError: an unknown joint, a joint whose actuator has no gains when none are given, or
             anything :func:`add_drive` refuses, naming the joint.
     """
-    from drive_envelope._src.adapters.mujoco.spec import add_drive
+    from drive_envelope._src.adapters.mujoco.spec import add_drive, compile_copy
 
     joints = driven_joints(spec)
     for item in assignments:
@@ -211,7 +211,9 @@ def apply_drives(
         kind: _flag_gains(stiffness, damping, kind) for kind in {item.envelope.joint for item in assignments}
     }
     # the gains, control ranges and ratings MuJoCo compiles (dampratio, inheritrange, classes)
-    before = _compile_quietly(spec)
+    with warnings.catch_warnings(), mujoco_warnings():
+        warnings.simplefilter("ignore")  # the result's compile gives the warnings that matter
+        before = compile_copy(spec)  # None: the spec's own numbers are read
     ratings = joint_ratings(before, [item.joint for item in assignments]) if before is not None else {}
     done = []
     for item in assignments:
@@ -317,16 +319,6 @@ def _nearest_joints(name: str, joints: Sequence[str]) -> str:
     close = [j for j in joints if lowered and lowered in j.lower()][:3]
     close = close or difflib.get_close_matches(name, list(joints), n=3, cutoff=0.5)
     return f" (did you mean {', '.join(repr(j) for j in close)}?)" if close else ""
-
-
-def _compile_quietly(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
-    """``spec`` compiled as it is (None if it does not compile: the spec's own numbers are read)."""
-    try:
-        with warnings.catch_warnings(), mujoco_warnings():
-            warnings.simplefilter("ignore")  # the result's compile gives the warnings that matter
-            return spec.copy().compile()
-    except ValueError:
-        return None
 
 
 def _at(item: Assignment, exc: InputError) -> InputError:

@@ -239,7 +239,7 @@ def add_drives(
         )
     # the model as MuJoCo compiles it before the edit: dampratio gains, inheritrange control ranges
     # and the joints' qpos addresses for keyframes exist only there
-    before = _compiled(spec) if replace and len(spec.actuators) else None
+    before = compile_copy(spec) if replace and len(spec.actuators) else None
     existing = {joint: joint_actuators(spec, joint, before) for joint in joints}
     for joint, found in existing.items():
         if found and not replace:
@@ -326,7 +326,8 @@ def add_drives(
     return tuple(drives)
 
 
-def _compiled(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
+def compile_copy(spec: mujoco.MjSpec) -> mujoco.MjModel | None:
+    """``spec`` compiled as it is (a copy: the spec is not touched), None if it does not compile."""
     try:
         return spec.copy().compile()
     except ValueError:
