@@ -1,4 +1,7 @@
-"""Command-line options shared by ``drive-envelope check`` and ``fit`` (argparse only: a light import)."""
+"""Command-line options shared by ``drive-envelope check``, ``fit``, ``identify`` and ``replay``.
+
+argparse only: a light import.
+"""
 
 from __future__ import annotations
 
@@ -28,31 +31,37 @@ def add_column_arguments(parser: argparse.ArgumentParser, *, time: bool = True) 
     add_bag_arguments(parser)
 
 
-def add_bag_arguments(parser: argparse.ArgumentParser, *, commands: bool = True) -> None:
-    """Add ``--topic``, ``--bag-time`` (and ``--command-topic``, ``--command-joints``) for ROS 2 bags."""
+def add_bag_arguments(parser: argparse.ArgumentParser, *, joint: bool = False) -> None:
+    """Add ``--topic``, ``--command-topic``, ``--command-joints``, ``--bag-time`` for ROS 2 bags.
+
+    ``joint``: also ``--joint``, the one joint of a bag that a bench log is read from.
+    """
     group = parser.add_argument_group("ROS 2 bags (a rosbag2 folder or its .mcap/.db3; the ros extra)")
     group.add_argument(
         "--topic", default=None, metavar="TOPIC", help="sensor_msgs/JointState topic (default: the only one)"
     )
-    if commands:
-        group.add_argument(
-            "--command-topic",
-            default=None,
-            metavar="TOPIC",
-            help="targets: JointState, JointTrajectory (first point) or Float64MultiArray; NaN = drive off",
-        )
-        group.add_argument(
-            "--command-joints",
-            default=None,
-            metavar="A,B,...",
-            help="joint order of a Float64MultiArray command (default: the JointState order)",
-        )
+    group.add_argument(
+        "--command-topic",
+        default=None,
+        metavar="TOPIC",
+        help="targets: JointState, JointTrajectory (first point) or Float64MultiArray; NaN = drive off",
+    )
+    group.add_argument(
+        "--command-joints",
+        default=None,
+        metavar="A,B,...",
+        help="joint order of a Float64MultiArray command (default: the JointState order)",
+    )
     group.add_argument(
         "--bag-time",
         choices=("header", "bag"),
         default="header",
         help="sample time from the message header stamps (default) or the bag's receive times",
     )
+    if joint:
+        parser.add_argument(
+            "--joint", default=None, metavar="NAME", help="the joint of a bag (default: its only one)"
+        )
 
 
 def bag_from_args(args: argparse.Namespace) -> Any:

@@ -15,12 +15,14 @@ This module is imported for ``--help``: it stays free of NumPy, pint and every e
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 import time
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import NoReturn, TextIO
+from typing import Any, NoReturn, TextIO
 
 from drive_envelope._src.errors import InputError
 
@@ -40,15 +42,24 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
 
 
-def fraction(text: str) -> float:
-    """Argument type: a number in [0, 1] (``--tolerance 0.01``)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text!r}")
-    return value
+def fraction_in(high: float = 1.0, *, above_zero: bool = False) -> Callable[[str], float]:
+    """Argument type: a number in ``[0, high]``, or in ``(0, high]`` with ``above_zero``."""
+    span = f"{'(' if above_zero else '['}0, {high:g}]"
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not (0.0 < value <= high if above_zero else 0.0 <= value <= high):
+            raise argparse.ArgumentTypeError(f"expected a fraction in {span}, got {text!r}")
+        return value
+
+    return parse
+
+
+fraction = fraction_in()
+"""Argument type: a number in [0, 1] (``--tolerance 0.01``)."""
 
 
 def integer_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
@@ -99,6 +110,42 @@ def add_joint_source_arguments(
     source.add_argument("--envelope", metavar="FILE", help="envelope file (with --joint)")
 
 
+def add_actions(parser: argparse.ArgumentParser, dest: str) -> Any:
+    """The ACTION subparsers of a command group; the group without an ACTION prints its help (exit 2)."""
+
+    def usage(args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 2
+
+    parser.set_defaults(func=usage)
+    return parser.add_subparsers(dest=dest, metavar="ACTION")
+
+
+def check_joint_source(args: argparse.Namespace, command: str, *, map_excludes: tuple[str, ...] = ()) -> None:
+    """Refuse ``--joint`` without ``--datasheet``/``--envelope``, and ``--map`` with either.
+
+    ``map_excludes``: the command's other options a map file stands in for (``"instance"``).
+
+    Raises:
+        InputError: naming ``command`` (``"usd apply"``) and the flags to give or drop.
+    """
+    if args.joint is not None and args.datasheet is None and args.envelope is None:
+        raise InputError(f"{command} --joint: needs --datasheet FILE or --envelope FILE")
+    excluded = any(getattr(args, name) for name in map_excludes)
+    if args.map is not None and (args.datasheet is not None or args.envelope is not None or excluded):
+        flags = "/".join(f"--{name}" for name in ("datasheet", "envelope", *map_excludes))
+        raise InputError(f"{command} --map: the map file names the envelopes; drop {flags}")
+
+
+def joint_envelope(args: argparse.Namespace) -> Any:
+    """The envelope that ``--datasheet`` or ``--envelope`` names for ``--joint``."""
+    from drive_envelope._src.datasheet.resolve import resolve_envelope
+
+    if args.datasheet is not None:
+        return resolve_envelope(args.datasheet, where="--datasheet")
+    return resolve_envelope(args.envelope, where="--envelope")
+
+
 def add_format_argument(parser: argparse.ArgumentParser, choices: tuple[str, ...], help: str) -> None:
     """Add ``--format {choices}`` (default the first choice) and ``--json`` for ``--format json``."""
     parser.add_argument(
@@ -142,6 +189,23 @@ def checked_output(output: str | None, flag: str = "--output") -> str | None:
     return output
 
 
+def check_toml_or_json(path: str, flag: str, what: str) -> None:
+    """Refuse a ``flag`` file name that ends neither in .toml nor in .json (``what``: "a stand file").
+
+    Raises:
+        InputError: naming the flag, the file and what was expected.
+    """
+    if Path(path).suffix.lower() not in (".toml", ".json"):
+        raise InputError(f"{flag} {path!r}: expected {what} name ending in .toml or .json")
+
+
+def same_file(a: str, b: str) -> bool:
+    """Whether both files exist and are one (a symlink or another spelling of the name too)."""
+    import os
+
+    return os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b)
+
+
 def refuse_input_as_output(output: str | None, source: str | None, what: str, result: str) -> None:
     """Refuse ``--output`` naming the command's input file: the result would replace it silently.
 
@@ -154,12 +218,47 @@ def refuse_input_as_output(output: str | None, source: str | None, what: str, re
     Raises:
         InputError: both exist and are one file (a symlink or another spelling of the name too).
     """
-    import os
-
-    if output is None or source is None or not (os.path.exists(output) and os.path.exists(source)):
-        return
-    if os.path.samefile(output, source):
+    if output is not None and source is not None and same_file(output, source):
         raise InputError(f"--output {output!r} is {what} itself: write {result} to a new file")
+
+
+@contextlib.contextmanager
+def printed_warnings(
+    category: type[Warning] = Warning, *, once: bool = True, also_on_error: bool = False
+) -> Iterator[None]:
+    """Print each warning of ``category`` the block raises as a ``drive-envelope: warning:`` line.
+
+    Warnings of other categories are dropped; ``once``: a message raised again is printed once.
+    When the block fails, its error is the one line: the warnings are printed only with
+    ``also_on_error``.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", category)
+        try:
+            yield
+        except BaseException:
+            if also_on_error:
+                _print_caught(caught, category, once)
+            raise
+    _print_caught(caught, category, once)
+
+
+def _print_caught(caught: list[warnings.WarningMessage], category: type[Warning], once: bool) -> None:
+    messages = [str(item.message) for item in caught if issubclass(item.category, category)]
+    for message in dict.fromkeys(messages) if once else messages:
+        warn(message)
+
+
+def envelope_summary(envelope: Any) -> str:
+    """The four parameters as ``name=value unit`` pairs, for a command's line per drive."""
+    from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
+    from drive_envelope._src.format import format_value
+    from drive_envelope._src.params.table import si_unit
+
+    return ", ".join(
+        f"{field}={format_value(getattr(envelope, field), si_unit(field, envelope.joint))}"
+        for field in ENVELOPE_FIELDS
+    )
 
 
 class Progress:

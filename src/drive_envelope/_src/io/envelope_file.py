@@ -43,12 +43,16 @@ def envelope_to_toml(envelope: PerformanceEnvelope) -> str:
     return "\n".join(lines) + "\n"
 
 
-def envelope_to_json(envelope: PerformanceEnvelope) -> str:
-    """JSON text of an envelope file; an infinite ``max_actuator_velocity`` is written as ``"inf"``."""
-    data = {
+def envelope_data(envelope: PerformanceEnvelope) -> dict[str, object]:
+    """The envelope as a JSON-ready dict; an infinite ``max_actuator_velocity`` is ``"inf"``."""
+    return {
         k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in envelope.to_dict().items()
     }
-    return json.dumps(data, indent=2) + "\n"
+
+
+def envelope_to_json(envelope: PerformanceEnvelope) -> str:
+    """JSON text of an envelope file (:func:`envelope_data`)."""
+    return json.dumps(envelope_data(envelope), indent=2) + "\n"
 
 
 def save_envelope(

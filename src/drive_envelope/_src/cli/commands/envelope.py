@@ -5,13 +5,13 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument
+from drive_envelope._src.cli.common import add_actions, add_format_argument
 
 
 def register(subparsers: Any) -> None:
     """Add the ``envelope`` command group."""
     parser = subparsers.add_parser("envelope", help="inspect envelope files")
-    actions = parser.add_subparsers(dest="envelope_command", metavar="ACTION")
+    actions = add_actions(parser, "envelope_command")
     show = actions.add_parser("show", help="print an envelope file as a table with its corner points")
     show.add_argument(
         "file",
@@ -20,12 +20,6 @@ def register(subparsers: Any) -> None:
     )
     add_format_argument(show, ("text", "json", "toml"), "the table, or the envelope file as JSON or TOML")
     show.set_defaults(func=_show)
-    parser.set_defaults(func=lambda args: _usage(parser))
-
-
-def _usage(parser: argparse.ArgumentParser) -> int:
-    parser.print_help()
-    return 2
 
 
 def _show(args: argparse.Namespace) -> int:

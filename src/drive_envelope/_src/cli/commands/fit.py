@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 from drive_envelope._src.cli.common import (
     add_force_argument,
     add_format_argument,
     add_output_argument,
+    fraction_in,
     integer_at_least,
 )
 
@@ -56,14 +56,14 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--outlier-quantile",
-        type=_quantile,
+        type=fraction_in(0.5),
         default=0.0,
         metavar="Q",
         help="fraction of samples allowed outside (default 0: contain all; 0.5: central line through noise)",
     )
     parser.add_argument(
         "--frontier-band",
-        type=_band,
+        type=fraction_in(above_zero=True),
         default=None,
         metavar="B",
         help="fit the samples within this fraction of the upper hull, in (0, 1]; 1: every sample "
@@ -86,28 +86,6 @@ def register(subparsers: Any) -> None:
     add_format_argument(parser, ("text", "json"), "the fit as a table or as one JSON object (SI)")
     add_column_arguments(parser, time=False)
     parser.set_defaults(func=_run)
-
-
-def _quantile(text: str) -> float:
-    """Argument type of ``--outlier-quantile``: a number in [0, 0.5]."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 0.0 <= value <= 0.5:
-        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 0.5], got {text!r}")
-    return value
-
-
-def _band(text: str) -> float:
-    """Argument type of ``--frontier-band``: a fraction in (0, 1]."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 0.0 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a fraction in (0, 1], got {text!r}")
-    return value
 
 
 def _fixed(items: list[str], joint: str) -> dict[str, float]:
@@ -141,13 +119,18 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.analysis.fit import FitOptions
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import format_fit
-    from drive_envelope._src.cli.common import checked_output, refuse_input_as_output, status
+    from drive_envelope._src.cli.common import (
+        check_toml_or_json,
+        checked_output,
+        refuse_input_as_output,
+        status,
+    )
     from drive_envelope._src.errors import InputError
     from drive_envelope._src.io.envelope_file import save_envelope
 
     output = checked_output(args.output)
-    if output is not None and Path(output).suffix.lower() not in (".toml", ".json"):
-        raise InputError(f"--output {output!r}: expected an envelope file name ending in .toml or .json")
+    if output is not None:
+        check_toml_or_json(output, "--output", "an envelope file")
     source = args.from_curve or args.log  # simulate's JSON trajectory is a log with a .json name
     refuse_input_as_output(output, source, "the curve" if args.from_curve else "the log", "the envelope")
     options = FitOptions(

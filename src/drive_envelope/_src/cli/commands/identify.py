@@ -31,6 +31,8 @@ def _nonnegative(text: str) -> float:
 
 def register(subparsers: Any) -> None:
     """Add the ``identify`` command."""
+    from drive_envelope._src.analysis.options import add_bag_arguments
+
     parser = subparsers.add_parser(
         "identify",
         help="estimate the envelope (and drive, friction, armature) from bench logs",
@@ -114,18 +116,9 @@ def register(subparsers: Any) -> None:
         help="independent searches from seeds drawn from --seed; the best wins, their spread is reported "
         "(default 3)",
     )
-    _add_bag_arguments(parser)
+    add_bag_arguments(parser, joint=True)
     add_force_argument(parser)
     parser.set_defaults(func=_run)
-
-
-def _add_bag_arguments(parser: argparse.ArgumentParser) -> None:
-    from drive_envelope._src.analysis.options import add_bag_arguments
-
-    add_bag_arguments(parser)
-    parser.add_argument(
-        "--joint", default=None, metavar="NAME", help="the joint of a bag (default: its only one)"
-    )
 
 
 def _fit_names(text: str | None) -> list[str]:
@@ -142,10 +135,16 @@ def _fit_names(text: str | None) -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     import json
-    import warnings
 
     from drive_envelope._src.analysis.options import bag_from_args
-    from drive_envelope._src.cli.common import Progress, checked_output, status, warn
+    from drive_envelope._src.cli.common import (
+        Progress,
+        check_toml_or_json,
+        checked_output,
+        printed_warnings,
+        status,
+        warn,
+    )
     from drive_envelope._src.identify.optimize import SearchOptions
     from drive_envelope._src.identify.report import identification_text, identification_to_dict
     from drive_envelope._src.identify.run import identify
@@ -156,9 +155,9 @@ def _run(args: argparse.Namespace) -> int:
     envelope_output = checked_output(args.envelope_output, "--envelope-output")
     plot = checked_output(args.plot, "--plot")
     if output is not None:
-        _check_path(output, "--output", "a stand file")
+        check_toml_or_json(output, "--output", "a stand file")
     if envelope_output is not None:
-        _check_path(envelope_output, "--envelope-output", "an envelope file")
+        check_toml_or_json(envelope_output, "--envelope-output", "an envelope file")
     if plot is not None:
         from drive_envelope._src.plots.figure import check_figure_path
 
@@ -175,8 +174,7 @@ def _run(args: argparse.Namespace) -> int:
         restarts=args.restarts,
     )
     progress = _Progress(Progress("identify"))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", StandWarning)
+    with printed_warnings(StandWarning, once=False):
         try:
             result = identify(
                 args.train,
@@ -191,9 +189,6 @@ def _run(args: argparse.Namespace) -> int:
             )
         finally:
             progress.close()
-    for item in caught:
-        if issubclass(item.category, StandWarning):
-            warn(str(item.message))
     for note in result.notes:
         warn(note)
     if output is not None:
@@ -217,15 +212,6 @@ def _run(args: argparse.Namespace) -> int:
         if path is not None:
             status(f"wrote {path}")
     return 0
-
-
-def _check_path(path: str, flag: str, what: str) -> None:
-    from pathlib import Path
-
-    from drive_envelope._src.errors import InputError
-
-    if Path(path).suffix.lower() not in (".toml", ".json"):
-        raise InputError(f"{flag} {path!r}: expected {what} name ending in .toml or .json")
 
 
 def _check_apart(output: str | None, envelope_output: str | None, stand: str) -> None:

@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from drive_envelope._src.cli.common import (
+    add_actions,
     add_format_argument,
     add_joint_source_arguments,
     add_output_argument,
@@ -17,7 +18,7 @@ def register(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "mujoco", help="equip MJCF robots with drive_envelope.envelope drives and list them"
     )
-    actions = parser.add_subparsers(dest="mujoco_command", metavar="ACTION")
+    actions = add_actions(parser, "mujoco_command")
 
     apply = actions.add_parser(
         "apply",
@@ -66,7 +67,6 @@ def register(subparsers: Any) -> None:
     build.add_argument("--build-dir", default=None, metavar="DIR", help="build folder (default: see above)")
     build.add_argument("--quiet", action="store_true", help="show the compiler's output only on failure")
     build.set_defaults(func=_build_plugin)
-    parser.set_defaults(func=lambda args: _usage(parser))
 
 
 def _build_plugin(args: argparse.Namespace) -> int:
@@ -76,22 +76,13 @@ def _build_plugin(args: argparse.Namespace) -> int:
     return 0
 
 
-def _usage(parser: argparse.ArgumentParser) -> int:
-    parser.print_help()
-    return 2
-
-
 def _check_arguments(args: argparse.Namespace) -> None:
-    import os
     from pathlib import Path
 
-    from drive_envelope._src.cli.common import checked_output
+    from drive_envelope._src.cli.common import check_joint_source, checked_output, same_file
     from drive_envelope._src.errors import InputError
 
-    if args.joint is not None and args.datasheet is None and args.envelope is None:
-        raise InputError("mujoco apply --joint: needs --datasheet FILE or --envelope FILE")
-    if args.map is not None and (args.datasheet is not None or args.envelope is not None):
-        raise InputError("mujoco apply --map: the map file names the envelopes; drop --datasheet/--envelope")
+    check_joint_source(args, "mujoco apply")
     if args.output is None:
         raise InputError(
             f"mujoco apply: say where the result goes: -o {Path(args.model).stem}_envelope.xml (MuJoCo's "
@@ -100,7 +91,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
     output = checked_output(args.output) or ""
     if Path(output).suffix.lower() != ".xml":
         raise InputError(f"--output {output!r}: expected an .xml file name")
-    if os.path.exists(output) and os.path.exists(args.model) and os.path.samefile(output, args.model):
+    if same_file(output, args.model):
         raise InputError(f"--output {output!r} is ROBOT.xml itself: write a new file")
 
 
@@ -118,14 +109,10 @@ def _map_file(name: str) -> str:
 def _assignments(args: argparse.Namespace, spec: Any) -> list[Any]:
     from drive_envelope._src.adapters.mujoco.mjcf import Assignment, driven_joints
     from drive_envelope._src.adapters.usd.joint_map import match_joints, read_map, resolve_envelopes
-    from drive_envelope._src.cli.common import warn
-    from drive_envelope._src.datasheet.resolve import resolve_envelope
+    from drive_envelope._src.cli.common import joint_envelope, warn
 
     if args.map is None:
-        flag, name = (
-            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
-        )
-        return [Assignment(joint=args.joint, envelope=resolve_envelope(name, where=flag), where="--joint")]
+        return [Assignment(joint=args.joint, envelope=joint_envelope(args), where="--joint")]
     joint_map = read_map(_map_file(args.map))
     match = match_joints(joint_map, driven_joints(spec))
     for message in match.warnings:
@@ -182,7 +169,7 @@ def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) 
     """The report of ``mujoco apply`` as one JSON object on stdout (inf written as ``"inf"``)."""
     import json
 
-    from drive_envelope._src.io.envelope_file import envelope_to_json
+    from drive_envelope._src.io.envelope_file import envelope_data
 
     drives = [
         {
@@ -193,7 +180,7 @@ def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) 
             "gains_from": item.gains_from,
             "stiffness": item.stiffness,
             "damping": item.damping,
-            "envelope": json.loads(envelope_to_json(item.envelope)),
+            "envelope": envelope_data(item.envelope),
         }
         for item in done
     ]
@@ -226,39 +213,29 @@ def _report(done: list[Any], model: Any) -> list[str]:
 
 
 def _summary(envelope: Any, stiffness: float, damping: float) -> str:
+    from drive_envelope._src.cli.common import envelope_summary
     from drive_envelope._src.format import format_value
-    from drive_envelope._src.params.table import si_unit
 
-    parts = [
-        f"{field}={format_value(getattr(envelope, field), si_unit(field, envelope.joint))}"
-        for field in (
-            "max_effort",
-            "max_actuator_velocity",
-            "velocity_dependent_resistance",
-            "speed_effort_gradient",
-        )
-    ]
     gains = ("N*m/rad", "N*m*s/rad") if envelope.joint == "revolute" else ("N/m", "N*s/m")
-    parts += [f"stiffness={format_value(stiffness, gains[0])}", f"damping={format_value(damping, gains[1])}"]
-    return ", ".join(parts)
+    return (
+        f"{envelope_summary(envelope)}, stiffness={format_value(stiffness, gains[0])}, "
+        f"damping={format_value(damping, gains[1])}"
+    )
 
 
 def _show(args: argparse.Namespace) -> int:
     import json
     import math
-    import warnings
 
     from drive_envelope._src.adapters.mujoco.bypass import other_actuators
     from drive_envelope._src.adapters.mujoco.mjcf import read_model, uses_plugin
     from drive_envelope._src.adapters.mujoco.params import model_drives
-    from drive_envelope._src.cli.common import warn
+    from drive_envelope._src.cli.common import printed_warnings
     from drive_envelope._src.format import format_table, format_value
+    from drive_envelope._src.io.envelope_file import envelope_data
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with printed_warnings():
         model = read_model(args.model)
-    for message in dict.fromkeys(str(w.message) for w in caught):
-        warn(message)
     drives = model_drives(model) if uses_plugin(model) else ()
     others = other_actuators(model, drives)
     if args.format == "json":
@@ -275,11 +252,7 @@ def _show(args: argparse.Namespace) -> int:
                     "inputs": list(d.inputs),
                     "drive_type": d.drive_type,
                     "dynprm": [number(v) for v in d.dynprm],
-                    "envelope": None
-                    if d.envelope is None
-                    else {
-                        k: number(v) if isinstance(v, float) else v for k, v in d.envelope.to_dict().items()
-                    },
+                    "envelope": None if d.envelope is None else envelope_data(d.envelope),
                     "stiffness": d.stiffness,
                     "damping": d.damping,
                 }

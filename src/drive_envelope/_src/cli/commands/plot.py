@@ -90,11 +90,11 @@ def _run(args: argparse.Namespace) -> int:
     if args.format == "json":  # the report is the command's result: stdout
         import json
 
-        from drive_envelope._src.io.envelope_file import envelope_to_json
+        from drive_envelope._src.io.envelope_file import envelope_data
 
         report = {
             "output": output,
-            "envelope": json.loads(envelope_to_json(envelope)),  # inf written as "inf", as everywhere
+            "envelope": envelope_data(envelope),  # inf written as "inf", as everywhere
             "trajectories": [
                 {"file": path, "label": p.label, "samples": len(p.velocity)}
                 for path, p in zip(args.trajectory, points, strict=True)

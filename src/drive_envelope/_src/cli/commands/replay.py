@@ -35,30 +35,22 @@ def register(subparsers: Any) -> None:
     add_format_argument(parser, ("text", "json"), "the errors as text or as one JSON object (SI)")
     from drive_envelope._src.analysis.options import add_bag_arguments
 
-    add_bag_arguments(parser)
-    parser.add_argument(
-        "--joint", default=None, metavar="NAME", help="the joint of a bag (default: its only one)"
-    )
+    add_bag_arguments(parser, joint=True)
     parser.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     import json
-    import warnings
 
     from drive_envelope._src.analysis.options import bag_from_args
-    from drive_envelope._src.cli.common import warn
+    from drive_envelope._src.cli.common import printed_warnings
     from drive_envelope._src.identify.playback import playback_text, playback_to_dict, replay_logs
     from drive_envelope._src.identify.stand import StandWarning
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", StandWarning)
+    with printed_warnings(StandWarning, once=False):
         result = replay_logs(
             args.logs, args.stand, engine=args.engine, bag=bag_from_args(args), joint=args.joint
         )
-    for item in caught:
-        if issubclass(item.category, StandWarning):
-            warn(str(item.message))
     if args.format == "json":
         print(json.dumps(playback_to_dict(result), indent=2))
     else:

@@ -81,9 +81,13 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import warnings
-
-    from drive_envelope._src.cli.common import Progress, checked_output, refuse_input_as_output, status, warn
+    from drive_envelope._src.cli.common import (
+        Progress,
+        checked_output,
+        printed_warnings,
+        refuse_input_as_output,
+        status,
+    )
     from drive_envelope._src.errors import EngineWarning, InputError
     from drive_envelope._src.scenario.chain import ChainScenario, load_stand
     from drive_envelope._src.scenario.trajectory import (
@@ -113,17 +117,13 @@ def _run(args: argparse.Namespace) -> int:
     _say_cost(steps, args.engine)
     engine_module(args.engine)  # a missing extra is reported as such, not as a problem of the file
     progress = Progress(f"simulate {args.engine}")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", EngineWarning)
+    with printed_warnings(EngineWarning, once=False):  # where an engine is known to part from PhysX
         try:
             trajectory = simulate(scenario, args.engine, max_steps=args.max_steps, progress=progress)
         except InputError as exc:  # the run failed on this file's values: say which file
             raise InputError(f"{args.file}: {exc}") from None
         finally:
             progress.close()
-    for item in caught:  # where an engine is known to part from PhysX on this run
-        if issubclass(item.category, EngineWarning):
-            warn(str(item.message))
     if not isinstance(trajectory, Trajectory):
         return _write_chain(trajectory, output, chosen, args.force)
     if output is None:

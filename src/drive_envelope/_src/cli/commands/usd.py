@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from drive_envelope._src.cli.common import (
+    add_actions,
     add_format_argument,
     add_joint_source_arguments,
     add_output_argument,
@@ -17,7 +18,7 @@ def register(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "usd", help="author envelopes into USD assets (PhysxDrivePerformanceEnvelopeAPI)"
     )
-    actions = parser.add_subparsers(dest="usd_command", metavar="ACTION")
+    actions = add_actions(parser, "usd_command")
 
     apply = actions.add_parser(
         "apply",
@@ -61,29 +62,23 @@ def register(subparsers: Any) -> None:
     show.add_argument("asset", metavar="ROBOT.usd", help="USD file to read")
     add_format_argument(show, ("text", "json"), "the drives as a table or as one JSON object (SI)")
     show.set_defaults(func=_show)
-    parser.set_defaults(func=lambda args: _usage(parser))
-
-
-def _usage(parser: argparse.ArgumentParser) -> int:
-    parser.print_help()
-    return 2
 
 
 def _apply(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import status
+    from drive_envelope._src.cli.common import envelope_summary, printed_warnings, status
 
     _check_apply_arguments(args)
-    with _printed_warnings():
+    with printed_warnings(also_on_error=True):
         applied, written, drives = _apply_and_save(args)
         for item in applied if args.format == "text" else ():
             where = "" if item.authored_at == item.joint_path else f" [authored on {item.authored_at}]"
-            print(f"{item.joint_path} ({item.instance}){where}: {_summary(item.envelope)}")
+            print(f"{item.joint_path} ({item.instance}){where}: {envelope_summary(item.envelope)}")
     kind = "in place" if args.in_place else "self-contained" if args.flatten else f"a layer over {args.asset}"
     enveloped = sum(1 for record in drives if record.envelope is not None)
     if args.format == "json":
         import json
 
-        from drive_envelope._src.io.envelope_file import envelope_to_json
+        from drive_envelope._src.io.envelope_file import envelope_data
 
         report = {
             "output": written,
@@ -94,7 +89,7 @@ def _apply(args: argparse.Namespace) -> int:
                     "joint": item.joint_path,
                     "instance": item.instance,
                     "authored_at": item.authored_at,
-                    "envelope": json.loads(envelope_to_json(item.envelope)),  # inf as "inf"
+                    "envelope": envelope_data(item.envelope),  # inf as "inf"
                 }
                 for item in applied
             ],
@@ -116,8 +111,7 @@ def _apply_and_save(args: argparse.Namespace) -> tuple[list[Any], str, list[Any]
     from drive_envelope._src.adapters.usd.joint_map import read_map
     from drive_envelope._src.adapters.usd.save import save_stage
     from drive_envelope._src.adapters.usd.stage import open_overlay, open_stage
-    from drive_envelope._src.cli.common import warn
-    from drive_envelope._src.datasheet.resolve import resolve_envelope
+    from drive_envelope._src.cli.common import joint_envelope, warn
 
     joint_map = read_map(args.map) if args.map is not None else None  # map mistakes before any USD work
     stage = open_stage(args.asset) if args.in_place else open_overlay(args.asset)
@@ -126,10 +120,7 @@ def _apply_and_save(args: argparse.Namespace) -> tuple[list[Any], str, list[Any]
         for message in map_warnings:
             warn(message)
     else:
-        flag, name = (
-            ("--datasheet", args.datasheet) if args.datasheet is not None else ("--envelope", args.envelope)
-        )
-        envelope = resolve_envelope(name, where=flag)
+        envelope = joint_envelope(args)
         assignments = [Assignment(joint_path=args.joint, envelope=envelope, instance=args.instance)]
     applied = apply_envelopes(stage, assignments)
     for item in applied:
@@ -149,15 +140,10 @@ def _check_apply_arguments(args: argparse.Namespace) -> None:
     from pathlib import Path
 
     from drive_envelope._src.adapters.usd.save import check_output_name
-    from drive_envelope._src.cli.common import checked_output
+    from drive_envelope._src.cli.common import check_joint_source, checked_output, same_file
     from drive_envelope._src.errors import InputError
 
-    if args.joint is not None and args.datasheet is None and args.envelope is None:
-        raise InputError("usd apply --joint: needs --datasheet FILE or --envelope FILE")
-    if args.map is not None and (args.datasheet is not None or args.envelope is not None or args.instance):
-        raise InputError(
-            "usd apply --map: the map file names the envelopes; drop --datasheet/--envelope/--instance"
-        )
+    check_joint_source(args, "usd apply", map_excludes=("instance",))
     if args.in_place and (args.output is not None or args.flatten):
         raise InputError("usd apply --in-place: edits ROBOT.usd itself; drop -o/--output and --flatten")
     if args.in_place:
@@ -174,50 +160,8 @@ def _check_apply_arguments(args: argparse.Namespace) -> None:
             "--in-place edits the asset itself"
         )
     check_output_name(checked_output(args.output) or "", "--output")
-    if _same_file(args.output, args.asset):
+    if same_file(args.output, args.asset):
         raise InputError(f"--output {args.output!r} is the asset itself: use --in-place to edit it")
-
-
-def _same_file(a: str, b: str) -> bool:
-    import os
-
-    return os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b)
-
-
-def _printed_warnings() -> Any:
-    """Print every Python warning raised in the block as one ``drive-envelope: warning:`` line."""
-    import contextlib
-    import warnings
-
-    from drive_envelope._src.cli.common import warn
-
-    @contextlib.contextmanager
-    def printed() -> Any:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                yield
-            finally:
-                for message in dict.fromkeys(str(w.message) for w in caught):
-                    warn(message)
-
-    return printed()
-
-
-def _summary(envelope: Any) -> str:
-    from drive_envelope._src.format import format_value
-    from drive_envelope._src.params.table import si_unit
-
-    parts = [
-        f"{field}={format_value(getattr(envelope, field), si_unit(field, envelope.joint))}"
-        for field in (
-            "max_effort",
-            "max_actuator_velocity",
-            "velocity_dependent_resistance",
-            "speed_effort_gradient",
-        )
-    ]
-    return ", ".join(parts)
 
 
 def _show(args: argparse.Namespace) -> int:
@@ -226,9 +170,11 @@ def _show(args: argparse.Namespace) -> int:
 
     from drive_envelope._src.adapters.usd.authoring import list_drives
     from drive_envelope._src.adapters.usd.stage import open_stage, stage_units
+    from drive_envelope._src.cli.common import printed_warnings
     from drive_envelope._src.format import format_table, format_value
+    from drive_envelope._src.io.envelope_file import envelope_data
 
-    with _printed_warnings():
+    with printed_warnings(also_on_error=True):
         stage = open_stage(args.asset)
         records = list_drives(stage)
     units = stage_units(stage)
@@ -250,11 +196,7 @@ def _show(args: argparse.Namespace) -> int:
                     "max_effort": number(r.max_effort),
                     "stiffness": r.stiffness,
                     "damping": r.damping,
-                    "envelope": None
-                    if r.envelope is None
-                    else {
-                        k: number(v) if isinstance(v, float) else v for k, v in r.envelope.to_dict().items()
-                    },
+                    "envelope": None if r.envelope is None else envelope_data(r.envelope),
                 }
                 for r in records
             ],
