@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 from drive_envelope._src.datasheet.context import DeriveContext, candidate
 from drive_envelope._src.datasheet.result import Candidate, Duty
-from drive_envelope._src.datasheet.spec import ParamSource
+from drive_envelope._src.datasheet.spec import OutputRating, ParamSource
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.format import format_value
 
@@ -58,7 +58,7 @@ def effort_candidates(ctx: DeriveContext, duty: Duty) -> list[Candidate]:
             ctx.notes.append(
                 f"{torque_key} not given for {duty} duty (use --duty {flag} for the other rating)"
             )
-    rating_key, rating = _output_effort(ctx, duty)
+    rating = _output_effort(ctx, duty)
     candidates = [
         candidate(
             "controller_current",
@@ -83,43 +83,39 @@ def effort_candidates(ctx: DeriveContext, duty: Duty) -> list[Candidate]:
             [("gear.max_torque", gear.max_torque if gear else None, u["torque"]), *ctx.screw_inputs],
             lambda v: t.gear_output_effort(v[0]),
         ),
-        candidate(
-            "output_rating",
-            f"output {rating_key.split('.')[1]}",
-            [(rating_key, rating, u["joint_effort"])],
-            lambda v: v[0],
-        ),
-        candidate(
-            "output_stall",
-            "output stall_effort",
-            [("output.stall_effort", output.stall_effort if output else None, u["joint_effort"])],
-            lambda v: v[0],
-        ),
+        _output_rating("output_rating", output, rating, u["joint_effort"]),
+        _output_rating("output_stall", output, "stall_effort", u["joint_effort"]),
     ]
     _check_finite(candidates, "max_effort", ctx)
     return candidates
 
 
-def _output_effort(ctx: DeriveContext, duty: Duty) -> tuple[str, float | None]:
-    """The output rating that caps effort for ``duty``: its key and SI value (or None)."""
+def _output_effort(ctx: DeriveContext, duty: Duty) -> str:
+    """The field of the output rating that caps effort for ``duty``."""
     output = ctx.sheet.output
     if output is None:
-        return "output.max_effort", None
+        return "max_effort"
     if duty == "continuous":
         if output.nominal_effort is not None:
-            return "output.nominal_effort", output.nominal_effort
+            return "nominal_effort"
         if output.max_effort is not None:
             ctx.notes.append(
                 "output.nominal_effort not given for continuous duty: "
                 "output.max_effort (a peak rating) is used"
             )
-        return "output.max_effort", output.max_effort
+        return "max_effort"
     if output.max_effort is None and output.stall_effort is None and output.nominal_effort is not None:
         ctx.notes.append(
             "output.max_effort not given: output.nominal_effort (the continuous rating) limits peak duty too"
         )
-        return "output.nominal_effort", output.nominal_effort
-    return "output.max_effort", output.max_effort
+        return "nominal_effort"
+    return "max_effort"
+
+
+def _output_rating(name: str, output: OutputRating | None, field: str, unit: str) -> Candidate:
+    """The candidate that is the [output] table's ``field`` itself (a joint-side rating)."""
+    value = getattr(output, field) if output is not None else None
+    return candidate(name, f"output {field}", [(f"output.{field}", value, unit)], lambda v: v[0])
 
 
 def velocity_candidates(ctx: DeriveContext) -> list[Candidate]:
@@ -160,18 +156,8 @@ def velocity_candidates(ctx: DeriveContext) -> list[Candidate]:
             [("gear.max_input_speed", gear.max_input_speed if gear else None, u["speed"]), *ratio_inputs],
             lambda v: t.motor_speed(v[0]),
         ),
-        candidate(
-            "output_rating",
-            "output max_velocity",
-            [("output.max_velocity", output.max_velocity if output else None, u["joint_speed"])],
-            lambda v: v[0],
-        ),
-        candidate(
-            "output_no_load",
-            "output no_load_velocity",
-            [("output.no_load_velocity", output.no_load_velocity if output else None, u["joint_speed"])],
-            lambda v: v[0],
-        ),
+        _output_rating("output_rating", output, "max_velocity", u["joint_speed"]),
+        _output_rating("output_no_load", output, "no_load_velocity", u["joint_speed"]),
     ]
     _check_finite(candidates, "max_actuator_velocity", ctx)
     return candidates

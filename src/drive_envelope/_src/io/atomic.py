@@ -193,19 +193,12 @@ def atomic_path(path: str | os.PathLike[str], *, force: bool = False) -> Iterato
     tmp = Path(tmp_name)
     done = False
     try:
-        with _cleanup_on_sigterm():
-            try:
-                yield tmp
-                _copy_metadata(target, tmp)
-                os.replace(tmp, target)
-                done = True
-            except _Interrupted:
-                raise SystemExit(128 + signal.SIGTERM) from None
-    except OSError as exc:
-        raise InputError(f"{shown}: cannot write: {_reason(exc)}") from None
+        with _finishing(tmp, shown):
+            yield tmp
+            _copy_metadata(target, tmp)
+            os.replace(tmp, target)
+            done = True
     finally:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
         if not done:
             _remove_folders(created)
 
@@ -220,11 +213,18 @@ def _streamed(shown: Path, kind: str) -> Iterator[Path]:
     fd, tmp_name = tempfile.mkstemp(prefix="drive-envelope.", suffix=f".tmp{shown.suffix[:32]}")
     os.close(fd)
     tmp = Path(tmp_name)
+    with _finishing(tmp, shown):
+        yield tmp
+        _copy_into(tmp, shown, kind)
+
+
+@contextlib.contextmanager
+def _finishing(tmp: Path, shown: Path) -> Iterator[None]:
+    """Remove ``tmp`` after the block, however it ends; SIGTERM exits, an OSError names ``shown``."""
     try:
         with _cleanup_on_sigterm():
             try:
-                yield tmp
-                _copy_into(tmp, shown, kind)
+                yield
             except _Interrupted:
                 raise SystemExit(128 + signal.SIGTERM) from None
     except OSError as exc:
