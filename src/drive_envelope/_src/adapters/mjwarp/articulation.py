@@ -20,7 +20,7 @@ integrator).
 
 import warp as wp  # noqa: TID253 (imported only by kernels.py, itself imported lazily)
 
-from drive_envelope._src.adapters.mjwarp.solve import Layout, _finite, propagate
+from drive_envelope._src.adapters.mjwarp.solve import IntWork, Layout, Work, _finite, propagate
 from drive_envelope._src.kernels.warp_funcs import clamp_drive_impulse_func, implicit_drive_params
 
 wp.set_module_options({"fuse_fp": False})
@@ -37,14 +37,7 @@ _PASS_VELOCITY = wp.constant(2)
 
 @wp.func
 def _visit(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    w: int,
-    r: int,
-    mode: int,
-    span: wp.float64,
-    elapsed: wp.float64,
+    work: Work, iwork: IntWork, lay: Layout, w: int, r: int, mode: int, span: wp.float64, elapsed: wp.float64
 ):
     """One drive of one sweep: PhysX's drive block of ``solveInternalJointConstraintRecursive``."""
     iwork[lay.solves, w] = iwork[lay.solves, w] + 1
@@ -86,8 +79,8 @@ def _visit(
 
 @wp.func
 def articulation(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
+    work: Work,
+    iwork: IntWork,
     lay: Layout,
     accel: wp.array[wp.int32],
     w: int,

@@ -23,7 +23,7 @@ every other actuator's force (``J'*xfrc_applied`` is added after it by MJWarp's 
 import warp as wp
 
 from drive_envelope._src.adapters.mjwarp.articulation import articulation
-from drive_envelope._src.adapters.mjwarp.solve import Layout, solve_drives
+from drive_envelope._src.adapters.mjwarp.solve import IntWork, Layout, Work, solve_drives
 
 wp.set_module_options({"fuse_fp": False})
 
@@ -185,12 +185,7 @@ def _damping_derivative(
 
 @wp.func
 def _factor(
-    work: wp.array2d[wp.float64],
-    lay: Layout,
-    M_rownnz: wp.array[int],
-    M_rowadr: wp.array[int],
-    M_colind: wp.array[int],
-    w: int,
+    work: Work, lay: Layout, M_rownnz: wp.array[int], M_rowadr: wp.array[int], M_colind: wp.array[int], w: int
 ):
     """Factor the matrix at ``lay.mh`` in place as M = L' D L (MuJoCo's mj_factorI), 1/D to ``lay.dinv``.
 
@@ -217,7 +212,7 @@ def _factor(
 
 @wp.func
 def _back_substitute(
-    work: wp.array2d[wp.float64],
+    work: Work,
     lay: Layout,
     M_rownnz: wp.array[int],
     M_rowadr: wp.array[int],
@@ -237,7 +232,7 @@ def _back_substitute(
 
 
 @wp.func
-def _dot_dinv(work: wp.array2d[wp.float64], lay: Layout, w: int, u: int, v: int, top: int) -> wp.float64:
+def _dot_dinv(work: Work, lay: Layout, w: int, u: int, v: int, top: int) -> wp.float64:
     """The product u' D^-1 v over DOFs 0..top."""
     total = wp.float64(0.0)
     for k in range(top + 1):
@@ -257,8 +252,8 @@ def _read_requests(
     ctrl: wp.array2d[float],
     delayed: wp.array2d[float],
     lay: Layout,
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
+    work: Work,
+    iwork: IntWork,
     w: int,
 ) -> bool:
     """Each drive's numbers and inputs into the scratch; returns whether any drive gives effort.
@@ -321,14 +316,7 @@ def _read_requests(
 
 
 @wp.func
-def _prepare(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    accel: wp.array[wp.int32],
-    w: int,
-    h: wp.float64,
-):
+def _prepare(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, h: wp.float64):
     """Each drive's unclamped law w = c - alpha*v1: J = b - a*v1 (force) or (b - a*v1)/r (acceleration).
 
     a = h*(h*k + c), b = h*k*(q* - q) + h*c*v*, plus the feed-forward impulse ff*h in c.
@@ -384,8 +372,8 @@ def _drive_kernel(
     delayed: wp.array2d[float],
     force: wp.array2d[float],
     bias: wp.array2d[float],
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
+    work: Work,
+    iwork: IntWork,
     stats: wp.array2d[wp.int32],
     actuator_force: wp.array2d[float],
 ):

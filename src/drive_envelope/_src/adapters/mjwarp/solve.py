@@ -36,6 +36,11 @@ _MAX_NEWTON = wp.constant(MAX_NEWTON)
 _MAX_SWEEPS = wp.constant(MAX_SWEEPS)
 _MAX_FLIPS = wp.constant(MAX_FLIPS)
 
+Work = wp.array2d[wp.float64]
+"""The float64 scratch of every world, ``work[slot, world]`` (the slots: :class:`Layout`)."""
+IntWork = wp.array2d[wp.int32]
+"""The int32 scratch, ``iwork[slot, world]``."""
+
 
 @wp.struct
 class Layout:
@@ -84,7 +89,7 @@ def _finite(x: wp.float64) -> bool:
 
 
 @wp.func
-def _cholesky_solve(work: wp.array2d[wp.float64], q: int, b: int, m: int, w: int) -> bool:
+def _cholesky_solve(work: Work, q: int, b: int, m: int, w: int) -> bool:
     """Solve q*x = b in place (b becomes x), q symmetric positive definite m x m, row-major at ``q``.
 
     Right-looking Cholesky; the diagonal keeps 1/L_kk. False if q is not positive definite.
@@ -115,7 +120,7 @@ def _cholesky_solve(work: wp.array2d[wp.float64], q: int, b: int, m: int, w: int
 
 
 @wp.func
-def _lu_solve(work: wp.array2d[wp.float64], a: int, b: int, n: int, w: int) -> bool:
+def _lu_solve(work: Work, a: int, b: int, n: int, w: int) -> bool:
     """Solve a*x = b in place (b becomes x), a general n x n row-major at ``a``; partial pivoting.
 
     False if a is singular.
@@ -151,9 +156,7 @@ def _lu_solve(work: wp.array2d[wp.float64], a: int, b: int, n: int, w: int) -> b
 
 
 @wp.func
-def _inside(
-    work: wp.array2d[wp.float64], lay: Layout, w: int, r: int, dt: wp.float64, x: wp.float64, v: wp.float64
-):
+def _inside(work: Work, lay: Layout, w: int, r: int, dt: wp.float64, x: wp.float64, v: wp.float64):
     """Whether (x, v) lies inside drive r's envelope by a relative 1e-9: the clamp returns x unchanged."""
     p = lay.prm + 6 * r
     ax = wp.abs(x)
@@ -167,8 +170,8 @@ def _inside(
 
 @wp.func
 def _row_solve(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
+    work: Work,
+    iwork: IntWork,
     lay: Layout,
     accel: wp.array[wp.int32],
     w: int,
@@ -218,15 +221,7 @@ def _row_solve(
 
 
 @wp.func
-def _track(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    w: int,
-    r: int,
-    x: wp.float64,
-    effort: wp.float64,
-):
+def _track(work: Work, iwork: IntWork, lay: Layout, w: int, r: int, x: wp.float64, effort: wp.float64):
     """Record drive r's result; count its switches between letting go (0) and an effort (the latch)."""
     if iwork[lay.active + r, w] == 0:
         return
@@ -239,7 +234,7 @@ def _track(
 
 
 @wp.func
-def propagate(work: wp.array2d[wp.float64], lay: Layout, w: int, r: int, impulse: wp.float64):
+def propagate(work: Work, lay: Layout, w: int, r: int, impulse: wp.float64):
     """An impulse on drive r moves every drive's velocity through A's column r (A is symmetric)."""
     if impulse != wp.float64(0.0) and _finite(impulse):
         for s in range(lay.n):
@@ -247,7 +242,7 @@ def propagate(work: wp.array2d[wp.float64], lay: Layout, w: int, r: int, impulse
 
 
 @wp.func
-def _velocities(work: wp.array2d[wp.float64], lay: Layout, w: int):
+def _velocities(work: Work, lay: Layout, w: int):
     """The end-of-step velocities of the (finite) impulses: v = vfree + A*x."""
     for r in range(lay.n):
         work[lay.v + r, w] = work[lay.vfree + r, w]
@@ -256,7 +251,7 @@ def _velocities(work: wp.array2d[wp.float64], lay: Layout, w: int):
 
 
 @wp.func
-def _linear_guess(work: wp.array2d[wp.float64], iwork: wp.array2d[wp.int32], lay: Layout, w: int):
+def _linear_guess(work: Work, iwork: IntWork, lay: Layout, w: int):
     """Every drive's unclamped law at once: (diag(1/alpha) + A) x = c/alpha - vfree, into ``x``.
 
     Drives with alpha ~ 0 keep x = c; a failed factorization falls back to one Jacobi step from vfree
@@ -297,14 +292,7 @@ def _linear_guess(work: wp.array2d[wp.float64], iwork: wp.array2d[wp.int32], lay
 
 
 @wp.func
-def _newton(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    accel: wp.array[wp.int32],
-    w: int,
-    dt: wp.float64,
-):
+def _newton(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64):
     """Newton's method on x_r = G_r(rest_r(x)), G_r a drive's own solve; returns (converged, steps).
 
     G_r is piecewise linear: slope -alpha/(1 + alpha*A_rr) where the clamp did not bind, else
@@ -367,14 +355,7 @@ def _newton(
 
 
 @wp.func
-def _gauss_seidel(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    accel: wp.array[wp.int32],
-    w: int,
-    dt: wp.float64,
-):
+def _gauss_seidel(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64):
     """Gauss-Seidel over the drives in DOF order from where Newton left; returns the sweeps.
 
     A drive is solved again when another's update moved its velocity by more than 1e-12*(1 + |v|);
@@ -413,14 +394,7 @@ def _gauss_seidel(
 
 
 @wp.func
-def solve_drives(
-    work: wp.array2d[wp.float64],
-    iwork: wp.array2d[wp.int32],
-    lay: Layout,
-    accel: wp.array[wp.int32],
-    w: int,
-    dt: wp.float64,
-):
+def solve_drives(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64):
     """Every drive's effort into ``work[lay.effort]``; returns the iterations (0: the linear solve sufficed).
 
     The linear solve of the unclamped laws; if every drive is inside its envelope by 1e-9 that is
