@@ -45,15 +45,13 @@ range); the default mode leaves the sign of a zero result unspecified. Where no 
 (checked once per call), PhysX's selects are ``numpy.minimum``/``numpy.maximum``, which also return
 their second operand on a tie.
 
-Speed (``benchmarks/bench_kernels.py``, N = 1e6 float64, medians of interleaved rounds, thread
-CPU time, 2-core EPYC shared with other jobs): the default mode runs in 11-12x the time of
-``np.clip`` on the same arrays (2.2-2.7x faster than the previous release's 27-30x), because a
-large clamp runs in blocks of ``_BLOCK`` elements that stay in the cache, and two reductions skip
-the per-element selects where every curve has one slope sign or no denominator is near 0; the
-issue's goal of 10x is not met (the remaining ~35 passes each cost about a third of ``np.clip``).
-``physx_exact=True`` takes 18-19x. In float32 the two modes take 0.24x and 0.36x the former
-literal float32 port. Selects on the request's sign are done on bit patterns (``_select``): ``numpy.where``
-under a mask that flips at random costs ten integer passes.
+Speed (``benchmarks/bench_kernels.py``, N = 1e6 float64, thread CPU time, 2-core EPYC): the
+default mode takes 9-12x the time of ``np.clip`` on the same arrays (the issue's goal: 10x), since
+a large clamp runs in blocks of ``_BLOCK`` elements that stay in the cache and one or two
+reductions skip the per-element selects where every curve has one slope sign or no denominator is
+near 0 (each remaining pass costs about a third of ``np.clip``); ``physx_exact=True`` 14-20x.
+Selects on the request's sign are bit operations (``select``): ``numpy.where`` under a mask that
+flips at random costs ten integer passes.
 
 Why torch has its own port (``kernels/torch_ops.py``): it must not take these data-dependent
 branches (host syncs, graph breaks), and the bit selects and ``out=`` buffers have no array-API
@@ -69,6 +67,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
+from drive_envelope._src.envelope.bitselect import bits, int_mask, into, select, sign_bit_pattern
 from drive_envelope._src.envelope.model import PerformanceEnvelope, require_envelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.validation import broadcast_shape
@@ -286,45 +285,11 @@ def _clamp_blocks(args: list[Array], shape: tuple[int, ...], *, exact: bool) -> 
     out = np.empty(size, dtype=args[0].dtype)
     for start in range(0, size, _BLOCK):
         block = slice(start, start + _BLOCK)
-        part = _clamp(*(a if a.ndim == 0 else a[block] for a in flat), exact=exact)
-        out[block] = part
+        target = out[block]
+        part = _clamp(*(a if a.ndim == 0 else a[block] for a in flat), exact=exact, out=target)
+        if part is not target:
+            target[...] = part
     return out.reshape(shape)
-
-
-def _into(ufunc: np.ufunc, a: Array, b: Any) -> Array:
-    """``ufunc(a, b)``, written into ``a`` (a temporary of ours) when it already has the result's shape."""
-    fits = isinstance(a, np.ndarray) and (np.ndim(b) == 0 or a.shape == np.shape(b))
-    return ufunc(a, b, out=a if fits else None)  # type: ignore[no-any-return]
-
-
-# Selects on bit patterns. numpy.where branches per element: under a mask that flips at random
-# (the sign of the requests) it costs 3.6 ms per million float64, against 0.2 ms per integer
-# pass; a select as (a ^ b) & mask ^ b takes three. Bit operations are exact for every value.
-_INT = {np.dtype(np.float32): np.int32, np.dtype(np.float64): np.int64}
-
-
-def _bits(a: Any, real: Any) -> Array:
-    """The bit pattern of ``a`` as signed integers of ``real``'s width (a view, no copy of an array)."""
-    return np.asarray(a, dtype=real).view(_INT[np.dtype(real)])
-
-
-def _mask(condition: Any, real: Any) -> Array:
-    """``condition`` as an integer mask of ``real``'s width: all ones where true, 0 where false."""
-    flags = np.asarray(condition)
-    mask = np.empty(flags.shape, dtype=_INT[np.dtype(real)])
-    return np.negative(flags.view(np.int8), out=mask, casting="unsafe")  # type: ignore[no-any-return]
-
-
-def _sign_bit(real: Any) -> Any:
-    """The sign bit of ``real`` as an integer (the bit pattern of ``-0.0``)."""
-    return _bits(-0.0, real)
-
-
-def _select(mask: Array, a: Any, b: Any, real: Any) -> Array:
-    """``numpy.where(mask, a, b)`` for an integer ``mask`` of :func:`_mask`, bit for bit."""
-    other = _bits(b, real)
-    picked = _into(np.bitwise_and, np.bitwise_xor(_bits(a, real), other), mask)
-    return _into(np.bitwise_xor, picked, other).view(real)
 
 
 def _pmax(a: Any, b: Any) -> Array:
@@ -352,7 +317,7 @@ class _Signs(NamedTuple):
     sign: Array
     """``-1`` where PhysX takes its negative branch (``x <= 0`` or NaN), else ``+1``."""
     negative: Array
-    """Integer mask (:func:`_mask`) of ``sign < 0``."""
+    """Integer mask (:func:`int_mask`) of ``sign < 0``."""
     zero: Array
     """PhysX's literal ``0`` as the positive branch sees it after mirroring: ``-0.0`` where negative."""
 
@@ -384,7 +349,7 @@ def _bounds(
     real = num1.dtype.type
     eps, zero = real(PX_EPS_F32), real(0.0)
     bound1 = np.true_divide(num1, denom1)
-    bound2 = _into(np.true_divide, num2, denom2)
+    bound2 = into(np.true_divide, num2, denom2)
     if parts is not None:
         dev, limit = parts
         bound1 = _split_overflow(bound1, num1, dev, limit, denom1, negate=True)
@@ -392,28 +357,31 @@ def _bounds(
     if signs is None:
         nan_free = True
         # one slope sign for every element is the common case (a whole robot's drives on one side
-        # of r = k): two reductions then replace the per-element selects (7 passes)
-        low, high = np.min(denom1, initial=np.inf), np.max(denom1, initial=-np.inf)
-        if low >= zero:  # every curve rising
+        # of r = k): a reduction or two then replace the per-element selects (7 passes)
+        low = np.min(denom1, initial=np.inf)
+        # the maximum only where a slope is near or past r = k (a NaN minimum fails the test too);
+        # _near_zero reuses both
+        high = None if low >= eps else np.max(denom1, initial=-np.inf)
+        if high is None or low >= zero:  # every curve rising
             upper, lower = bound2, bound1
         elif high < zero:  # every curve falling (a NaN denominator fails both tests)
             upper, lower = np.minimum(bound1, bound2), np.zeros((), dtype=real)
         else:
-            rising = _mask(np.greater_equal(denom1, zero), real)
-            upper = _select(rising, bound2, np.minimum(bound1, bound2), real)
-            lower = _into(np.bitwise_and, _bits(bound1, real), rising).view(real)  # where(rising, b1, 0)
+            rising = int_mask(np.greater_equal(denom1, zero), real)
+            upper = select(rising, bound2, np.minimum(bound1, bound2), real)
+            lower = into(np.bitwise_and, bits(bound1, real), rising).view(real)  # where(rising, b1, 0)
     else:
-        rising = _mask(np.greater_equal(denom1, zero), real)
+        rising = int_mask(np.greater_equal(denom1, zero), real)
         nan_free = not _has_nan(bound1, bound2, request)
         pmin = np.minimum if nan_free else _pmin
         # PxMax(0, bound1) (0 is never NaN, so numpy.maximum selects alike); falling: 0
-        lower = np.maximum(signs.zero, _select(rising, bound1, signs.zero, real))
+        lower = np.maximum(signs.zero, select(rising, bound1, signs.zero, real))
         # PhysX's negative branch takes PxMax(PxMax(bound1, bound2), x): mirrored, b2 comes first
-        swap = _into(np.bitwise_and, np.bitwise_xor(_bits(bound1, real), _bits(bound2, real)), signs.negative)
-        first = np.bitwise_xor(_bits(bound1, real), swap).view(real)
-        second = _into(np.bitwise_xor, swap, _bits(bound2, real)).view(real)
-        upper = pmin(_select(rising, bound2, pmin(first, second), real), request)
-    flat = _near_zero(denom1, eps)
+        swap = into(np.bitwise_and, np.bitwise_xor(bits(bound1, real), bits(bound2, real)), signs.negative)
+        first = np.bitwise_xor(bits(bound1, real), swap).view(real)
+        second = into(np.bitwise_xor, swap, bits(bound2, real)).view(real)
+        upper = pmin(select(rising, bound2, pmin(first, second), real), request)
+    flat = _near_zero(denom1, eps, None if signs is not None else (low, high))
     if flat is not None:  # denom1 ~ 0: the lower curve is a yes/no test on the gap num1
         near = np.abs(num1) < eps
         if signs is None:
@@ -432,13 +400,17 @@ def _bounds(
     return lower, upper, nan_free
 
 
-def _near_zero(denom: Any, eps: Any) -> Array | None:
+def _near_zero(denom: Any, eps: Any, extremes: tuple[Any, Any | None] | None = None) -> Array | None:
     """The mask ``|denom| < eps``, or None where no element is that close to 0.
 
     Two reductions decide the common case (every denominator on one side, away from 0) without
-    the three passes of the mask; a NaN fails both tests and takes the mask.
+    the three passes of the mask; a NaN fails both tests and takes the mask. ``extremes``: the
+    ``(min, max)`` of ``denom`` already reduced (``max`` None where ``min >= eps`` made it moot).
     """
-    if np.min(denom, initial=np.inf) >= eps or np.max(denom, initial=-np.inf) <= -eps:
+    low, high = extremes if extremes is not None else (np.min(denom, initial=np.inf), None)
+    if low >= eps:
+        return None
+    if (np.max(denom, initial=-np.inf) if high is None else high) <= -eps:
         return None
     near = np.abs(denom) < eps
     return near if np.any(near) else None
@@ -472,8 +444,8 @@ def _numerators(dev: Array, limit: Any, signs: _Signs | None) -> tuple[Array, Ar
         return np.subtract(dev, limit), np.add(dev, limit)
     signed = np.multiply(limit, signs.sign)
     return (
-        _into(np.multiply, np.subtract(dev, signed), signs.sign),
-        _into(np.multiply, _into(np.add, signed, dev), signs.sign),
+        into(np.multiply, np.subtract(dev, signed), signs.sign),
+        into(np.multiply, into(np.add, signed, dev), signs.sign),
     )
 
 
@@ -488,24 +460,29 @@ def _clamp(
     resist: Array,
     *,
     exact: bool,
+    out: Array | None = None,
 ) -> Array:
-    """The clamp on arrays of one dtype (broadcasting), both branches through the positive one."""
+    """The clamp on arrays of one dtype (broadcasting), both branches through the positive one.
+
+    ``out``: where the default mode may write its result (it does where the shapes agree; the
+    caller copies what is returned otherwise), saving the copy of a block.
+    """
     real = x.dtype.type
     one, zero = real(1.0), real(0.0)
-    dev = _into(np.subtract, np.multiply(x0, r), v0)
+    dev = into(np.subtract, np.multiply(x0, r), v0)
     if exact:
-        negative = _mask(~(x > zero), real)
-        sign = _select(negative, -one, one, real)
-        signed_zero = np.bitwise_and(negative, _sign_bit(real)).view(real)  # -0.0 where negative
+        negative = int_mask(~(x > zero), real)
+        sign = select(negative, -one, one, real)
+        signed_zero = np.bitwise_and(negative, sign_bit_pattern(real)).view(real)  # -0.0 where negative
         signs: _Signs | None = _Signs(sign, negative, signed_zero)
         request = x * sign
     else:
         # s = copysign(1, x): a zero request may take either branch (both give 0), a NaN one gives 0.
         # Flipping the sign bit is the multiplication by s, exactly.
         signs = None
-        sign_bit = np.bitwise_and(_bits(x, real), _sign_bit(real))
-        request = np.bitwise_xor(_bits(x, real), sign_bit).view(real)  # |x|
-        dev = _into(np.bitwise_xor, _bits(dev, real), sign_bit).view(real)
+        sign_bit = np.bitwise_and(bits(x, real), sign_bit_pattern(real))
+        request = np.bitwise_xor(bits(x, real), sign_bit).view(real)  # |x|
+        dev = into(np.bitwise_xor, bits(dev, real), sign_bit).view(real)
     # eq. 2 (speed-effort line)
     parts1 = None if exact else (dev, max_v)
     lo1, hi1, clean1 = _bounds(*_numerators(dev, max_v, signs), r - grad, r + grad, request, signs, parts1)
@@ -532,8 +509,8 @@ def _clamp(
         # PxClamp(x, lower, upper) = PxMin(upper, PxMax(lower, x)), mirrored for negative requests
         # (the two orders differ only in the sign of a zero: a tie returns the second operand)
         mirrored = pmax(lower, pmin(upper, request))
-        clamped = _select(signs.negative, mirrored, pmin(upper, pmax(lower, request)), real)
-        return np.where(lower > upper, zero, _into(np.multiply, clamped, sign))
+        clamped = select(signs.negative, mirrored, pmin(upper, pmax(lower, request)), real)
+        return np.where(lower > upper, zero, into(np.multiply, clamped, sign))
     if plain is not None and np.any(plain):
         lo2 = np.where(plain, real(-np.inf), lo2)
         hi2 = np.where(plain, real(np.inf), hi2)
@@ -541,9 +518,12 @@ def _clamp(
     # The floor also holds PhysX's PxMax(0, bound1) of both curves.
     # -max_x <= 0 unless a cap is negative (or NaN): then the floor is the element's own
     floor = zero if np.min(max_x, initial=np.inf) >= zero else np.maximum(np.negative(max_x), zero)
-    lower = _into(np.maximum, np.maximum(lo1, lo2), floor)
-    upper = _into(np.minimum, _into(np.minimum, np.minimum(hi1, hi2), max_x), request)
+    lower = into(np.maximum, np.maximum(lo1, lo2), floor)
+    upper = into(np.minimum, into(np.minimum, np.minimum(hi1, hi2), max_x), request)
     # lower <= min(upper, x) is PhysX's lower <= upper here; a NaN fails it and the drive lets go
-    feasible = _mask(lower <= upper, real)
-    result = _into(np.bitwise_xor, _bits(upper, real), sign_bit)  # times s
-    return _into(np.bitwise_and, result, feasible).view(real)  # where(feasible, ..., +0.0)
+    feasible = int_mask(lower <= upper, real)
+    result = into(np.bitwise_xor, bits(upper, real), sign_bit)  # times s
+    if out is not None and out.shape == np.broadcast_shapes(result.shape, feasible.shape):
+        np.bitwise_and(result, feasible, out=out.view(result.dtype))  # where(feasible, ..., +0.0)
+        return out
+    return into(np.bitwise_and, result, feasible).view(real)
