@@ -13,7 +13,7 @@ import io
 import json
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -22,6 +22,9 @@ from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.scenario.trajectory import Trajectory, trajectory_format
+
+if TYPE_CHECKING:
+    from drive_envelope._src.scenario.chain import ChainScenario
 
 FloatArray = npt.NDArray[np.float64]
 _QUANTITIES = ("position", "velocity", "effort")
@@ -127,6 +130,32 @@ class ChainTrajectory:
             },
             "metadata": self.metadata,
         }
+
+
+def chain_run(
+    scenario: ChainScenario,
+    engine: str,
+    position: FloatArray,
+    velocity: FloatArray,
+    effort: FloatArray,
+    **metadata: Any,
+) -> ChainTrajectory:
+    """An engine's run of ``scenario``: rows ``(steps + 1, dofs)`` from t = 0 every ``dt`` [s].
+
+    The metadata holds the scenario's solver settings and then ``metadata`` (precision, effort source).
+    """
+    sim = scenario.simulation
+    return ChainTrajectory(
+        time=np.arange(position.shape[0], dtype=np.float64) * sim.dt,
+        position=position,
+        velocity=velocity,
+        effort=effort,
+        joints=scenario.names,
+        types=tuple(joint.type for joint in scenario.joints),
+        engine=engine,
+        name=scenario.name,
+        metadata={**sim.metadata(), **metadata},
+    )
 
 
 def chain_trajectory_to_csv(trajectory: ChainTrajectory) -> str:

@@ -28,10 +28,10 @@ from drive_envelope._src.adapters.physx.chain_scene import (
     zero_pose,
 )
 from drive_envelope._src.adapters.physx.runner import _attached, _physx, _read_joints, _write
-from drive_envelope._src.errors import InputError
+from drive_envelope._src.adapters.physx.stand import check_time_step
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_frames import rotate
-from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory, chain_run
 
 EFFORT_SOURCE = (
     "PhysX jointProjectedForce: the joint force projected on each DOF, which on a chain also carries "
@@ -49,29 +49,13 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
             (>= 0.7) / physx-usd-schemas missing.
         DriveEnvelopeError: PhysX itself failed.
     """
-    sim = scenario.simulation
-    if not 1.0 / sim.dt < 2**32:
-        raise InputError(f"{scenario.name or 'scenario'}: simulation.dt {sim.dt!r} is too small for PhysX")
+    check_time_step(scenario)
     stage = build_chain_stage(scenario)  # held: the layer dies with the stage
     usda = stage.GetRootLayer().ExportToString()
     with _physx() as physx, _attached(physx, usda=usda):
-        samples = _step(physx, scenario)
-    position, velocity, effort = samples
-    time = np.arange(sim.steps + 1, dtype=np.float64) * sim.dt
-    return ChainTrajectory(
-        time=time,
-        position=position,
-        velocity=velocity,
-        effort=effort,
-        joints=scenario.names,
-        types=tuple(joint.type for joint in scenario.joints),
-        engine="physx",
-        name=scenario.name,
-        metadata={
-            **sim.metadata(),
-            "precision": "float32",
-            "effort_source": EFFORT_SOURCE,
-        },
+        position, velocity, effort = _step(physx, scenario)
+    return chain_run(
+        scenario, "physx", position, velocity, effort, precision="float32", effort_source=EFFORT_SOURCE
     )
 
 

@@ -23,11 +23,16 @@ lacks. The envelope is authored with the same code as ``drive-envelope usd apply
 
 from __future__ import annotations
 
-import math
-import warnings
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.adapters.physx.scene import _set, define_articulation_root, define_physics_scene
+from drive_envelope._src.adapters.physx.scene import (
+    author_drive,
+    define_articulation_root,
+    define_body,
+    define_physics_scene,
+    new_stage,
+)
+from drive_envelope._src.adapters.usd.scale import StageUnits
 from drive_envelope._src.scenario.chain_frames import (
     IDENTITY,
     Quaternion,
@@ -44,7 +49,6 @@ if TYPE_CHECKING:
 CHAIN_PATH = "/World/chain"
 """Prim path of the articulation root."""
 _BASE = f"{CHAIN_PATH}/base"
-_HUGE = 1.0e30  # "no cap" for PhysX floats that have a finite default
 
 
 def link_path(joint: ChainJoint) -> str:
@@ -68,50 +72,14 @@ def zero_pose(scenario: ChainScenario) -> list[tuple[Quaternion, tuple[float, fl
     return poses
 
 
-def _body(stage: Usd.Stage, path: str, *, mass: float, inertia: tuple[float, ...], com: tuple[float, ...],
-          translate: tuple[float, ...], orient: Quaternion = IDENTITY,
-          principal_axes: Quaternion = IDENTITY) -> None:  # fmt: skip
-    from pxr import Gf, Sdf, UsdGeom, UsdPhysics
-
-    xform = UsdGeom.Xform.Define(stage, path)
-    xform.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*translate))
-    if orient != IDENTITY:
-        xform.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Quatd(orient[0], *orient[1:]))
-    prim = xform.GetPrim()
-    UsdPhysics.RigidBodyAPI.Apply(prim)
-    mass_api = UsdPhysics.MassAPI.Apply(prim)
-    mass_api.CreateMassAttr().Set(float(mass))
-    mass_api.CreateDiagonalInertiaAttr().Set(Gf.Vec3f(*inertia))
-    mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(*com))
-    if principal_axes != IDENTITY:
-        mass_api.CreatePrincipalAxesAttr().Set(Gf.Quatf(principal_axes[0], *principal_axes[1:]))
-    prim.ApplyAPI("PhysxRigidBodyAPI")
-    for name in ("linearDamping", "angularDamping", "cfmScale", "sleepThreshold", "stabilizationThreshold"):
-        _set(prim, f"physxRigidBody:{name}", Sdf.ValueTypeNames.Float, 0.0)
-    for name in ("maxLinearVelocity", "maxAngularVelocity"):
-        _set(prim, f"physxRigidBody:{name}", Sdf.ValueTypeNames.Float, _HUGE)
-
-
 def build_chain_stage(scenario: ChainScenario) -> Usd.Stage:
     """Author the chain scenario as an in-memory USD stage (SI units)."""
-    from drive_envelope._src.adapters.usd.stage import register_schemas
-
-    register_schemas()
-    from pxr import Sdf, Usd, UsdGeom, UsdPhysics
-
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
-    UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/World").GetPrim())
+    stage = new_stage(StageUnits())
     define_physics_scene(stage, scenario.simulation, (0.0, 0.0, -1.0), float(scenario.simulation.gravity))
     define_articulation_root(stage, CHAIN_PATH, scenario.simulation)
-    _body(stage, _BASE, mass=1.0, inertia=(1.0, 1.0, 1.0), com=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0))
-    fixed = UsdPhysics.FixedJoint.Define(stage, f"{CHAIN_PATH}/rootJoint")
-    fixed.CreateBody1Rel().SetTargets([Sdf.Path(_BASE)])
     for joint, (orient, here) in zip(scenario.joints, zero_pose(scenario), strict=True):
-        _body(stage, link_path(joint), mass=joint.mass, inertia=joint.inertia, com=joint.com, translate=here,
-              orient=orient, principal_axes=joint.inertia_quat)  # fmt: skip
+        define_body(stage, link_path(joint), mass=joint.mass, inertia=joint.inertia, centre=joint.com,
+                    translate=here, orient=orient, principal_axes=joint.inertia_quat)  # fmt: skip
         body0 = _BASE if joint.parent < 0 else link_path(scenario.joints[joint.parent])
         _joint(stage, joint, body0)
     return stage
@@ -119,8 +87,6 @@ def build_chain_stage(scenario: ChainScenario) -> Usd.Stage:
 
 def _joint(stage: Usd.Stage, spec: ChainJoint, body0: str) -> None:
     from pxr import Gf, Sdf, UsdPhysics
-
-    from drive_envelope._src.adapters.usd.authoring import EnvelopeAuthoringWarning, write_envelope
 
     revolute = spec.type == "revolute"
     kind = UsdPhysics.RevoluteJoint if revolute else UsdPhysics.PrismaticJoint
@@ -136,31 +102,5 @@ def _joint(stage: Usd.Stage, spec: ChainJoint, body0: str) -> None:
     if rot0 != IDENTITY or rot1 != IDENTITY:
         joint.CreateLocalRot0Attr().Set(Gf.Quatf(rot0[0], *rot0[1:]))
         joint.CreateLocalRot1Attr().Set(Gf.Quatf(rot1[0], *rot1[1:]))
-    prim = joint.GetPrim()
     inst = "angular" if revolute else "linear"
-    per_degree = math.pi / 180.0 if revolute else 1.0  # USD stores angular values per degree
-    prim.ApplyAPI("PhysxJointAxisAPI", inst)
-    friction = spec.friction
-    axis = {
-        "armature": spec.armature,
-        "staticFrictionEffort": friction.static_friction,
-        "dynamicFrictionEffort": friction.dynamic_friction,
-        "viscousFrictionCoefficient": friction.viscous_friction * per_degree,
-        "maxJointVelocity": _HUGE,
-    }
-    for name, value in axis.items():
-        _set(prim, f"physxJointAxis:{inst}:{name}", Sdf.ValueTypeNames.Float, float(value))
-    drive_spec = spec.drive
-    drive = UsdPhysics.DriveAPI.Apply(prim, inst)
-    drive.CreateTypeAttr().Set(drive_spec.type)
-    drive.CreateStiffnessAttr().Set(float(drive_spec.stiffness * per_degree))
-    drive.CreateDampingAttr().Set(float(drive_spec.damping * per_degree))
-    drive.CreateTargetPositionAttr().Set(float(drive_spec.target_position / per_degree))
-    drive.CreateTargetVelocityAttr().Set(float(drive_spec.target_velocity / per_degree))
-    if spec.envelope is not None:
-        with warnings.catch_warnings():  # the stand's gains are meant, not a per-radian mistake
-            warnings.simplefilter("ignore", EnvelopeAuthoringWarning)
-            write_envelope(prim, None, spec.envelope, inst)
-    else:
-        max_force = drive_spec.max_effort
-        drive.CreateMaxForceAttr().Set(math.inf if math.isinf(max_force) else float(max_force))
+    author_drive(joint.GetPrim(), inst, spec.drive, spec.envelope, StageUnits(), spec.armature, spec.friction)

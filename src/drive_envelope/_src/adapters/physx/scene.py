@@ -30,12 +30,15 @@ import os
 import warnings
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.adapters.usd.scale import StageUnits
+from drive_envelope._src.adapters.usd.scale import StageUnits, is_angular
+from drive_envelope._src.scenario.chain_frames import IDENTITY, Quaternion
 
 if TYPE_CHECKING:
     from pxr import Usd
 
-    from drive_envelope._src.scenario.spec import Scenario, SimulationSpec
+    from drive_envelope._src.envelope.model import PerformanceEnvelope
+    from drive_envelope._src.scenario.loads import FrictionSpec
+    from drive_envelope._src.scenario.spec import DriveSpec, Scenario, SimulationSpec
 
 ARTICULATION_PATH = "/World/stand"
 """Prim path of the articulation root (the tensor-binding pattern)."""
@@ -59,23 +62,10 @@ def build_teststand_stage(
     Returns:
         The stage.
     """
-    from drive_envelope._src.adapters.usd.stage import register_schemas
-
-    register_schemas()
-    from pxr import Sdf, Usd, UsdGeom, UsdPhysics
-
     units = units or StageUnits()
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageMetersPerUnit(stage, units.meters_per_unit)
-    UsdPhysics.SetStageKilogramsPerUnit(stage, units.kilograms_per_unit)
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    world = UsdGeom.Xform.Define(stage, "/World")
-    stage.SetDefaultPrim(world.GetPrim())
+    stage = new_stage(units)
     _define_scene(stage, scenario, units)
     define_articulation_root(stage, ARTICULATION_PATH, scenario.simulation)
-    _define_body(stage, f"{ARTICULATION_PATH}/base", mass=1.0, inertia=(1.0, 1.0, 1.0))
-    fixed = UsdPhysics.FixedJoint.Define(stage, f"{ARTICULATION_PATH}/rootJoint")
-    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{ARTICULATION_PATH}/base")])
     revolute = scenario.joint.type == "revolute"
     mass_si = 1.0 if revolute else scenario.joint.inertia
     inertia_si = scenario.joint.inertia if revolute else 1.0
@@ -85,16 +75,26 @@ def build_teststand_stage(
         # hanging straight down (-Y, along gravity) at position = -angle_offset
         offset, distance = pendulum.angle_offset, pendulum.distance * units.length()
         mass_si, centre = pendulum.mass, (distance * math.sin(offset), -distance * math.cos(offset), 0.0)
-    _define_body(
-        stage,
-        LINK_PATH,
-        mass=mass_si * units.mass(),
-        inertia=(inertia_si * units.inertia(),) * 3,
-        centre=centre,
-    )
+    define_body(stage, LINK_PATH, mass=mass_si * units.mass(), inertia=(inertia_si * units.inertia(),) * 3,
+                centre=centre)  # fmt: skip
     _define_joint(stage, scenario, units)
     if path is not None:
         stage.GetRootLayer().Export(os.fspath(path))
+    return stage
+
+
+def new_stage(units: StageUnits) -> Usd.Stage:
+    """An in-memory stage in ``units``, Z up, with ``/World`` as its default prim."""
+    from drive_envelope._src.adapters.usd.stage import register_schemas
+
+    register_schemas()
+    from pxr import Usd, UsdGeom, UsdPhysics
+
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, units.meters_per_unit)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, units.kilograms_per_unit)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/World").GetPrim())
     return stage
 
 
@@ -133,7 +133,10 @@ def define_physics_scene(
 
 
 def define_articulation_root(stage: Usd.Stage, path: str, sim: SimulationSpec) -> None:
-    """An articulation root at ``path``: its iteration counts; no sleep, stabilization or self-collision."""
+    """An articulation root at ``path``: its iteration counts; no sleep, stabilization or self-collision.
+
+    Its fixed base is ``<path>/base``, a unit rigid body welded to the world by ``<path>/rootJoint``.
+    """
     from pxr import Sdf, UsdGeom, UsdPhysics
 
     root = UsdGeom.Xform.Define(stage, path).GetPrim()
@@ -145,39 +148,51 @@ def define_articulation_root(stage: Usd.Stage, path: str, sim: SimulationSpec) -
     _set(root, "physxArticulation:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
     _set(root, "physxArticulation:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
     _set(root, "physxArticulation:enabledSelfCollisions", Sdf.ValueTypeNames.Bool, False)
+    define_body(stage, f"{path}/base", mass=1.0, inertia=(1.0, 1.0, 1.0))
+    fixed = UsdPhysics.FixedJoint.Define(stage, f"{path}/rootJoint")
+    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{path}/base")])
 
 
-def _define_body(
+def define_body(
     stage: Usd.Stage,
     path: str,
     *,
     mass: float,
-    inertia: tuple[float, float, float],
-    centre: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    inertia: tuple[float, ...],
+    centre: tuple[float, ...] = (0.0, 0.0, 0.0),
+    translate: tuple[float, ...] | None = None,
+    orient: Quaternion = IDENTITY,
+    principal_axes: Quaternion = IDENTITY,
 ) -> None:
+    """A rigid body at ``path``, posed by ``translate`` and ``orient`` when given (stage units).
+
+    No damping, ``cfmScale`` 0, no velocity caps, no sleep: PhysX adds nothing the reference lacks.
+    """
     from pxr import Gf, Sdf, UsdGeom, UsdPhysics
 
-    prim = UsdGeom.Xform.Define(stage, path).GetPrim()
+    xform = UsdGeom.Xform.Define(stage, path)
+    if translate is not None:
+        xform.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*translate))
+    if orient != IDENTITY:
+        xform.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Quatd(orient[0], *orient[1:]))
+    prim = xform.GetPrim()
     UsdPhysics.RigidBodyAPI.Apply(prim)
     mass_api = UsdPhysics.MassAPI.Apply(prim)
     mass_api.CreateMassAttr().Set(float(mass))
     mass_api.CreateDiagonalInertiaAttr().Set(Gf.Vec3f(*inertia))
     mass_api.CreateCenterOfMassAttr().Set(Gf.Vec3f(*centre))
+    if principal_axes != IDENTITY:
+        mass_api.CreatePrincipalAxesAttr().Set(Gf.Quatf(principal_axes[0], *principal_axes[1:]))
     prim.ApplyAPI("PhysxRigidBodyAPI")
     # PhysX defaults: angular damping 0.05 and cfmScale 0.025 would add effort the drive model lacks
-    _set(prim, "physxRigidBody:linearDamping", Sdf.ValueTypeNames.Float, 0.0)
-    _set(prim, "physxRigidBody:angularDamping", Sdf.ValueTypeNames.Float, 0.0)
-    _set(prim, "physxRigidBody:cfmScale", Sdf.ValueTypeNames.Float, 0.0)
-    _set(prim, "physxRigidBody:maxLinearVelocity", Sdf.ValueTypeNames.Float, _HUGE)
-    _set(prim, "physxRigidBody:maxAngularVelocity", Sdf.ValueTypeNames.Float, _HUGE)
-    _set(prim, "physxRigidBody:sleepThreshold", Sdf.ValueTypeNames.Float, 0.0)
-    _set(prim, "physxRigidBody:stabilizationThreshold", Sdf.ValueTypeNames.Float, 0.0)
+    for name in ("linearDamping", "angularDamping", "cfmScale", "sleepThreshold", "stabilizationThreshold"):
+        _set(prim, f"physxRigidBody:{name}", Sdf.ValueTypeNames.Float, 0.0)
+    for name in ("maxLinearVelocity", "maxAngularVelocity"):
+        _set(prim, f"physxRigidBody:{name}", Sdf.ValueTypeNames.Float, _HUGE)
 
 
 def _define_joint(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
     from pxr import Sdf, UsdPhysics
-
-    from drive_envelope._src.adapters.usd.authoring import EnvelopeAuthoringWarning, write_envelope
 
     revolute = scenario.joint.type == "revolute"
     if revolute:
@@ -188,33 +203,55 @@ def _define_joint(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> No
         joint.CreateAxisAttr().Set(UsdPhysics.Tokens.x)
     joint.CreateBody0Rel().SetTargets([Sdf.Path(f"{ARTICULATION_PATH}/base")])
     joint.CreateBody1Rel().SetTargets([Sdf.Path(LINK_PATH)])
-    prim = joint.GetPrim()
     inst = "angular" if revolute else "linear"
+    armature = scenario.joint.armature * (units.inertia() if revolute else units.mass())
+    author_drive(joint.GetPrim(), inst, scenario.drive, scenario.envelope, units, armature, scenario.friction)
+
+
+def drive_gains(drive: DriveSpec, inst: str, units: StageUnits) -> tuple[float, float]:
+    """``(stiffness, damping)`` of a drive as the stage stores them (per degree on angular drives)."""
+    if drive.type == "force":
+        return drive.stiffness * units.per_position(inst), drive.damping * units.per_speed(inst)
+    # acceleration gains: per time only, but per degree on angular drives like every gain
+    angle = 1.0 / units.position(inst) if is_angular(inst) else 1.0
+    return drive.stiffness * angle, drive.damping * angle
+
+
+def author_drive(
+    prim: Usd.Prim,
+    inst: str,
+    spec: DriveSpec,
+    envelope: PerformanceEnvelope | None,
+    units: StageUnits,
+    armature: float,
+    friction: FrictionSpec,
+) -> None:
+    """A stand joint's drive and its envelope (else the drive's maxForce), in stage units.
+
+    Also its PhysxJointAxisAPI: ``armature`` (in stage units), friction and no velocity cap.
+    """
+    from pxr import Sdf, UsdPhysics
+
+    from drive_envelope._src.adapters.usd.authoring import EnvelopeAuthoringWarning, write_envelope
+
     # per-axis joint properties (PhysX reads PhysxJointAxisAPI before the older PhysxJointAPI)
     prim.ApplyAPI("PhysxJointAxisAPI", inst)
-    friction = scenario.friction
     axis = {
-        "armature": scenario.joint.armature * (units.inertia() if revolute else units.mass()),
+        "armature": armature,
         "staticFrictionEffort": friction.static_friction * units.effort(inst),
         "dynamicFrictionEffort": friction.dynamic_friction * units.effort(inst),
         "viscousFrictionCoefficient": friction.viscous_friction * units.per_speed(inst),  # per degree
+        "maxJointVelocity": _HUGE,
     }
     for name, value in axis.items():
         _set(prim, f"physxJointAxis:{inst}:{name}", Sdf.ValueTypeNames.Float, float(value))
-    _set(prim, f"physxJointAxis:{inst}:maxJointVelocity", Sdf.ValueTypeNames.Float, _HUGE)
-    spec = scenario.drive
     drive = UsdPhysics.DriveAPI.Apply(prim, inst)
     drive.CreateTypeAttr().Set(spec.type)
-    if spec.type == "force":
-        stiffness, damping = spec.stiffness * units.per_position(inst), spec.damping * units.per_speed(inst)
-    else:  # acceleration gains: per time only, but per degree on angular drives like every gain
-        angle = 1.0 / units.position(inst) if revolute else 1.0
-        stiffness, damping = spec.stiffness * angle, spec.damping * angle
+    stiffness, damping = drive_gains(spec, inst, units)
     drive.CreateStiffnessAttr().Set(float(stiffness))
     drive.CreateDampingAttr().Set(float(damping))
     drive.CreateTargetPositionAttr().Set(float(spec.target_position * units.position(inst)))
     drive.CreateTargetVelocityAttr().Set(float(spec.target_velocity * units.velocity(inst)))
-    envelope = scenario.envelope
     if envelope is not None:
         with warnings.catch_warnings():
             # the authoring warnings judge a user's asset (per-radian gains, ...); the stand's gains are

@@ -25,9 +25,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from drive_envelope._src.adapters.physx.runner import PhysxJob, PhysxResult, run_jobs
-from drive_envelope._src.adapters.physx.scene import build_teststand_stage
+from drive_envelope._src.adapters.physx.scene import build_teststand_stage, drive_gains
 from drive_envelope._src.adapters.usd.scale import StageUnits
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
 from drive_envelope._src.scenario.trajectory import Trajectory
@@ -78,7 +79,7 @@ def simulate_many(
         raise InputError(f"physx: {len(plans)} drive schedules for {len(scenarios)} scenarios")
     jobs = []
     for scenario, schedule in zip(scenarios, plans, strict=True):
-        _check(scenario)
+        check_time_step(scenario)
         stage = build_teststand_stage(scenario, units=units)
         inst = "angular" if scenario.joint.type == "revolute" else "linear"
         jobs.append(
@@ -108,12 +109,7 @@ def _schedule_columns(
     if schedule is None:
         return {}
     schedule.check_steps(scenario.simulation.steps, f"scenario {scenario.name!r}")
-    drive = scenario.drive
-    if drive.type == "force":
-        stiffness, damping = drive.stiffness * units.per_position(inst), drive.damping * units.per_speed(inst)
-    else:  # acceleration gains are per degree on angular drives, as the stage authors them
-        angle = 1.0 / units.position(inst) if inst == "angular" else 1.0
-        stiffness, damping = drive.stiffness * angle, drive.damping * angle
+    stiffness, damping = drive_gains(scenario.drive, inst, units)  # as the stage authors them
     powered = schedule.enabled.astype(np.float64)
     return {
         "target_position": schedule.target_position * units.position(inst),
@@ -123,7 +119,8 @@ def _schedule_columns(
     }
 
 
-def _check(scenario: Scenario) -> None:
+def check_time_step(scenario: Scenario | ChainScenario) -> None:
+    """Refuse a time step PhysX cannot take (its step rate is a 32-bit count per second)."""
     sim = scenario.simulation
     if not 1.0 / sim.dt < 2**32:
         raise InputError(f"{scenario.name or 'scenario'}: simulation.dt {sim.dt!r} is too small for PhysX")

@@ -42,7 +42,7 @@ from drive_envelope._src.envelope.clamp import clamp_drive_impulse
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
-from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory, chain_run
 from drive_envelope._src.teststand.engines.chain_dynamics import ChainModel
 from drive_envelope._src.teststand.solver_terms import DriveLaw, drive_law, drive_request, friction_impulse
 
@@ -272,20 +272,14 @@ def simulate_chain(
                 progress(i + 1, count)
     if progress is not None:
         progress(count, count)
-    return ChainTrajectory(
-        time=np.arange(count + 1, dtype=np.float64) * sim.dt,
-        position=position,
-        velocity=velocity,
-        effort=effort,
-        joints=scenario.names,
-        types=tuple(joint.type for joint in scenario.joints),
-        engine="reference",
-        name=scenario.name,
-        metadata={
-            **sim.metadata(),
-            "precision": "float64",
-            "effort_source": "drive impulse / dt + applied effort (total actuator effort)",
-        },
+    return chain_run(
+        scenario,
+        "reference",
+        position,
+        velocity,
+        effort,
+        precision="float64",
+        effort_source="drive impulse / dt + applied effort (total actuator effort)",
     )
 
 
