@@ -11,7 +11,7 @@ from pathlib import Path
 from drive_envelope._src.analysis.check import CheckReport
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.plots.curve import OperatingPoints
-from drive_envelope._src.plots.figure import plain_text, plot_envelope, save_figure
+from drive_envelope._src.plots.figure import figure_class, plain_text, plot_envelope, save_figure
 
 
 def plot_check(report: CheckReport, path: str | os.PathLike[str], *, force: bool = False) -> list[Path]:
@@ -23,11 +23,7 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str], *, force: bool
     Raises:
         InputError: matplotlib is missing, no points were kept, or an unsupported suffix.
     """
-    try:
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
-
+    figure_cls = figure_class("--plot")
     target = Path(path)
     written = []
     for check in report.joints:
@@ -38,7 +34,7 @@ def plot_check(report: CheckReport, path: str | os.PathLike[str], *, force: bool
         samples = OperatingPoints(
             velocity=points.velocity, effort=points.effort, time=points.time, label=name
         )
-        figure = Figure(figsize=(7.0, 6.4), layout="constrained")
+        figure = figure_cls(figsize=(7.0, 6.4), layout="constrained")
         axes = figure.add_subplot(111)
         plot = plot_envelope(check.envelope, points=samples, ax=axes, highlight=points.outside, title=name)
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in check.joint)

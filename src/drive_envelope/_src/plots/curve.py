@@ -76,27 +76,21 @@ class OperatingPoints:
     """Legend label of the set, empty for ``points <n>``."""
 
     def __post_init__(self) -> None:
-        velocity = np.asarray(self.velocity, dtype=np.float64)
-        effort = np.asarray(self.effort, dtype=np.float64)
-        time = None if self.time is None else np.asarray(self.time, dtype=np.float64)
-        shapes = {a.shape for a in (velocity, effort, time) if a is not None}
-        if len(shapes) != 1 or velocity.ndim != 1:
-            given = ", ".join(
-                f"{n} {a.shape}"
-                for n, a in (("velocity", velocity), ("effort", effort), ("time", time))
-                if a is not None
-            )
-            raise InputError(f"OperatingPoints: expected 1-D arrays of one length, got {given}")
-        for name, values in (("velocity", velocity), ("effort", effort), ("time", time)):
-            if values is not None and not np.isfinite(values).all():
+        given = {"velocity": self.velocity, "effort": self.effort, "time": self.time}
+        arrays = {
+            name: np.asarray(values, dtype=np.float64) for name, values in given.items() if values is not None
+        }
+        if len({values.shape for values in arrays.values()}) != 1 or arrays["velocity"].ndim != 1:
+            shapes = ", ".join(f"{name} {values.shape}" for name, values in arrays.items())
+            raise InputError(f"OperatingPoints: expected 1-D arrays of one length, got {shapes}")
+        for name, values in arrays.items():
+            if not np.isfinite(values).all():
                 bad = int(np.flatnonzero(~np.isfinite(values))[0])
                 raise InputError(
                     f"operating points {self.label or ''!r}: {name}[{bad}] is {float(values[bad])!r}; "
                     "expected finite numbers (remove such samples before plotting)"
                 )
-        object.__setattr__(self, "velocity", velocity)
-        object.__setattr__(self, "effort", effort)
-        object.__setattr__(self, "time", time)
+            object.__setattr__(self, name, values)
 
     def __len__(self) -> int:
         return int(self.velocity.shape[0])
@@ -176,7 +170,7 @@ def envelope_curve(
         envelope=envelope,
         boundary=polygon,
         velocity=velocity,
-        effort_limit=_effort_limit(envelope, velocity),
+        effort_limit=effort_limit_at(envelope, velocity),
         lines=_lines(envelope, v_ext, e_ext),
         corners=_corner_points(envelope),
         velocity_extent=v_ext,
@@ -186,7 +180,7 @@ def envelope_curve(
     )
 
 
-def _effort_limit(envelope: PerformanceEnvelope, velocity: FloatArray) -> FloatArray:
+def effort_limit_at(envelope: PerformanceEnvelope, velocity: FloatArray) -> FloatArray:
     """The effort limit at ``velocity`` [N*m or N]; R*|v| beyond float range is a limit of 0, silently."""
     with np.errstate(over="ignore"):
         return envelope.effort_limit(velocity)
@@ -235,13 +229,7 @@ def _region(envelope: PerformanceEnvelope, cut: float, e_ext: float) -> FloatArr
     limits = ("max_effort", "max_actuator_velocity")  # inf: no limit, scaled or not
     if not all(math.isfinite(value) for key, value in unit.items() if key not in limits):
         return envelope.boundary(velocity_extent=cut)  # a scale beyond float range: draw it unscaled
-    scaled = PerformanceEnvelope(
-        max_effort=unit["max_effort"],
-        max_actuator_velocity=unit["max_actuator_velocity"],
-        velocity_dependent_resistance=unit["velocity_dependent_resistance"],
-        speed_effort_gradient=unit["speed_effort_gradient"],
-        joint=envelope.joint,
-    )
+    scaled = PerformanceEnvelope(**unit, joint=envelope.joint)  # type: ignore[arg-type]
     return scaled.boundary(velocity_extent=1.0) * np.array([cut, e_scale])
 
 

@@ -26,7 +26,13 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
-from drive_envelope._src.plots.curve import MAX_EXTENT, EnvelopeCurve, OperatingPoints, envelope_curve
+from drive_envelope._src.plots.curve import (
+    MAX_EXTENT,
+    EnvelopeCurve,
+    OperatingPoints,
+    effort_limit_at,
+    envelope_curve,
+)
 
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 """File types :func:`save_figure` writes."""
@@ -57,13 +63,12 @@ class EnvelopePlot:
     """The curve data drawn."""
 
 
-def _matplotlib() -> Any:
+def figure_class(what: str = "plotting") -> Any:
+    """``matplotlib.figure.Figure``; without matplotlib an error saying that ``what`` needs it."""
     try:
-        import matplotlib
         from matplotlib.figure import Figure
     except ImportError:
-        raise InputError("plotting needs matplotlib: pip install 'drive-envelope[plot]'") from None
-    del matplotlib
+        raise InputError(f"{what} needs matplotlib: pip install 'drive-envelope[plot]'") from None
     return Figure
 
 
@@ -166,7 +171,7 @@ def plot_envelope(
         InputError: matplotlib is missing, ``highlight`` does not match the points, a title or label
             is mathtext that does not parse, or the window cannot be drawn to scale.
     """
-    figure_cls = _matplotlib()
+    figure_cls = figure_class()
     trajectories = _as_list(points)
     if title is not None:
         check_text(title, "title")
@@ -306,8 +311,7 @@ def _draw_time_panel(
             traj.clock, traj.effort, style, color="#d62728", label=f"effort {label}"
         )
     first = trajectories[0]
-    with np.errstate(over="ignore"):  # R*|v| beyond float range: a limit of 0, no warning
-        limit = curve.envelope.effort_limit(first.velocity)
+    limit = effort_limit_at(curve.envelope, first.velocity)
     lines["limit"] = twin.plot(
         first.clock, limit, color="#d62728", linewidth=0.6, alpha=0.5, label="effort limit at v(t)"
     )

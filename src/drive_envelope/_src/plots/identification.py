@@ -14,10 +14,15 @@ from typing import Any
 
 import numpy as np
 
-from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.run import Identification, LogError
 from drive_envelope._src.plots.curve import OperatingPoints
-from drive_envelope._src.plots.figure import check_figure_path, plain_text, plot_envelope, save_figure
+from drive_envelope._src.plots.figure import (
+    check_figure_path,
+    figure_class,
+    plain_text,
+    plot_envelope,
+    save_figure,
+)
 
 MAX_ROWS = 4
 """Most logs drawn against time (the operating-point panel shows all)."""
@@ -25,10 +30,7 @@ MAX_ROWS = 4
 
 def identification_figure(result: Identification) -> Any:
     """The figure (a ``matplotlib.figure.Figure``) of an identification."""
-    try:
-        from matplotlib.figure import Figure as figure_cls
-    except ImportError:
-        raise InputError("--plot needs matplotlib: pip install 'drive-envelope[plot]'") from None
+    figure_cls = figure_class("--plot")
     shown = [*result.validation, *result.train][:MAX_ROWS]
     rows = max(len(shown), 1)
     figure = figure_cls(figsize=(16.0, 2.4 * rows + 1.6), layout="constrained")

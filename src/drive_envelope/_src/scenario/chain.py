@@ -24,7 +24,6 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
@@ -39,7 +38,15 @@ from drive_envelope._src.scenario.chain_frames import (
 )
 from drive_envelope._src.scenario.checks import check_finite
 from drive_envelope._src.scenario.loads import STANDARD_GRAVITY, FrictionSpec
-from drive_envelope._src.scenario.spec import DriveSpec, LoadSpec, Scenario, SimulationSpec
+from drive_envelope._src.scenario.spec import (
+    DriveSpec,
+    LoadSpec,
+    Scenario,
+    SimulationSpec,
+    effective_envelope,
+    from_file,
+    scenario_from_mapping,
+)
 
 Vector3 = tuple[float, float, float]
 AXES = ("x", "y", "z")
@@ -146,11 +153,7 @@ class ChainJoint:
 
     def effective_envelope(self) -> PerformanceEnvelope | None:
         """The envelope PhysX applies to drive + applied effort (see ``Scenario.effective_envelope``)."""
-        if self.envelope is not None:
-            return self.envelope
-        if math.isinf(self.drive.max_effort):
-            return None
-        return PerformanceEnvelope(max_effort=self.drive.max_effort, joint=self.type)
+        return effective_envelope(self.envelope, self.drive, self.type)
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -265,12 +268,7 @@ def load_chain_scenario(path: str | os.PathLike[str], overrides: Sequence[str] =
     Raises:
         InputError: one line naming the file, the key, the value and what was expected.
     """
-    from drive_envelope._src.io.files import read_mapping
-    from drive_envelope._src.scenario.overrides import apply_overrides
-
-    file = Path(path)
-    data = apply_overrides(read_mapping(file), overrides)
-    return chain_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+    return from_file(path, overrides, chain_from_mapping)
 
 
 def chain_from_mapping(
@@ -329,7 +327,7 @@ def _read_chain_joint(
     base_dir: str | os.PathLike[str] | None,
     one: Any,
 ) -> ChainJoint:
-    from drive_envelope._src.scenario.checks import choice, quantities, read_text, table, unit_for
+    from drive_envelope._src.scenario.checks import choice, quantities, read_text, require, table, unit_for
     from drive_envelope._src.scenario.loads import read_friction
     from drive_envelope._src.validation import check_keys
 
@@ -353,12 +351,7 @@ def _read_chain_joint(
             f"{source}: key '{where}.parent': expected 'base' or an earlier joint "
             f"({', '.join(names) or 'none yet'}), got {parent_name!r}"
         )
-    for key in ("mass", "inertia"):
-        if key not in entry:
-            raise InputError(
-                f"{source}: missing required key '{where}.{key}' "
-                f"({'kg' if key == 'mass' else 'kg*m^2, 3 principal or 6 full-tensor numbers'})"
-            )
+    require(entry, where, {"mass": "kg", "inertia": "kg*m^2, 3 principal or 6 full-tensor numbers"}, source)
     vectors: dict[str, Any] = {key: _read_vector(entry, key, where, source, unit) for key, unit in
                                (("origin", "m"), ("com", "m")) if key in entry}  # fmt: skip
     vectors.update(_read_frames(entry, where, source))
@@ -456,12 +449,8 @@ def load_stand(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     Raises:
         InputError: one line naming the file, the key, the value and what was expected.
     """
-    from drive_envelope._src.io.files import read_mapping
-    from drive_envelope._src.scenario.overrides import apply_overrides
-    from drive_envelope._src.scenario.spec import scenario_from_mapping
+    return from_file(path, overrides, _stand_from_mapping)
 
-    file = Path(path)
-    data = apply_overrides(read_mapping(file), overrides)
-    if is_chain_mapping(data):
-        return chain_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
-    return scenario_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+
+def _stand_from_mapping(data: Mapping[str, Any], **where: Any) -> Scenario | ChainScenario:
+    return (chain_from_mapping if is_chain_mapping(data) else scenario_from_mapping)(data, **where)

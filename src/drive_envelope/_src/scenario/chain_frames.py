@@ -131,10 +131,14 @@ def quat_taking_x_to(axis: Sequence[float]) -> Quaternion:
 
 def full_inertia(moments: Sequence[float], axes: Quaternion) -> Matrix3:
     """The inertia tensor ``R @ diag(moments) @ R.T`` in the link frame [kg*m^2]."""
-    r = quat_to_matrix(axes)
-    rows = []
-    for i in range(3):
-        rows.append(tuple(sum(r[i][k] * moments[k] * r[j][k] for k in range(3)) for j in range(3)))
+    return turn_tensor(axes, [[moments[i] if i == j else 0.0 for j in range(3)] for i in range(3)])
+
+
+def turn_tensor(q: Quaternion, tensor: Sequence[Sequence[float]]) -> Matrix3:
+    """``R(q) @ tensor @ R(q).T``: a tensor given in a frame turned by ``q``, in the parent frame."""
+    r = quat_to_matrix(q)
+    rows = [tuple(sum(r[i][a] * tensor[a][b] * r[j][b] for a in range(3) for b in range(3)) for j in range(3))
+            for i in range(3)]  # fmt: skip
     return rows[0], rows[1], rows[2]  # type: ignore[return-value]
 
 

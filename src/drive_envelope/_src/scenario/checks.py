@@ -38,6 +38,13 @@ def check_int(name: str, value: int, low: int) -> None:
         raise InputError(f"{name} must be an integer in {low}..{MAX_ITERATIONS}, got {value!r}")
 
 
+def require(data: Mapping[str, Any], section: str, needs: Mapping[str, str], source: str) -> None:
+    """Refuse a table without one of the keys of ``needs`` (key -> what it expects, for the message)."""
+    for key, what in needs.items():
+        if key not in data:
+            raise InputError(f"{source}: missing required key '{section}.{key}' ({what})")
+
+
 def table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
     """The table ``[name]`` of a scenario mapping (empty when absent)."""
     value = data.get(name, {})

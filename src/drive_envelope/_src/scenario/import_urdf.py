@@ -29,8 +29,8 @@ from drive_envelope._src.scenario.chain_frames import (
     Quaternion,
     quat_from_rpy,
     quat_multiply,
-    quat_to_matrix,
     rotate,
+    turn_tensor,
 )
 
 _MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
@@ -75,12 +75,7 @@ def _inertial(link: ET.Element, where: str) -> _Body:
     keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
     ixx, iyy, izz, ixy, ixz, iyz = (_numbers(element, key, 1, f"{where} inertia")[0] for key in keys)
     tensor = ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))
-    r = quat_to_matrix(turn)
-    turned = tuple(
-        tuple(sum(r[i][a] * tensor[a][b] * r[j][b] for a in range(3) for b in range(3)) for j in range(3))
-        for i in range(3)
-    )
-    return _Body(mass=mass, com=com, tensor=turned)  # type: ignore[arg-type]
+    return _Body(mass=mass, com=com, tensor=turn_tensor(turn, tensor))
 
 
 def _merge(body: _Body, part: _Body, shift: tuple[float, float, float], turn: Quaternion) -> _Body:
@@ -91,9 +86,7 @@ def _merge(body: _Body, part: _Body, shift: tuple[float, float, float], turn: Qu
     com_part = (shift[0] + moved[0], shift[1] + moved[1], shift[2] + moved[2])
     mass = body.mass + part.mass
     com = tuple((body.mass * a + part.mass * b) / mass for a, b in zip(body.com, com_part, strict=True))
-    r = quat_to_matrix(turn)
-    part_tensor = [[sum(r[i][a] * part.tensor[a][b] * r[j][b] for a in range(3) for b in range(3))
-                    for j in range(3)] for i in range(3)]  # fmt: skip
+    part_tensor = turn_tensor(turn, part.tensor)
     total = [[0.0] * 3 for _ in range(3)]
     for m, c, t in ((body.mass, body.com, body.tensor), (part.mass, com_part, part_tensor)):
         d = [c[i] - com[i] for i in range(3)]

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.scenario.checks import check_finite, quantities, unit_for
+from drive_envelope._src.scenario.checks import check_finite, quantities, require, unit_for
 from drive_envelope._src.validation import check_keys
 
 STANDARD_GRAVITY = 9.80665
@@ -102,11 +102,7 @@ def read_pendulum(data: Mapping[str, Any], joint: str, source: str) -> PendulumS
     check_keys(data, PENDULUM_KEYS, source, "pendulum")
     if joint != "revolute":
         raise InputError(f"{source}: [pendulum] needs a revolute joint, got joint.type {joint!r}")
-    for key in ("mass", "distance"):
-        if key not in data:
-            raise InputError(
-                f"{source}: missing required key 'pendulum.{key}' ({'kg' if key == 'mass' else 'm'})"
-            )
+    require(data, "pendulum", {"mass": "kg", "distance": "m"}, source)
     units = {"mass": "kg", "distance": "m", "angle_offset": "rad"}
     return PendulumSpec(**quantities(data, "pendulum", units, source))
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
@@ -32,6 +32,7 @@ from drive_envelope._src.scenario.checks import check_int as _check_int
 from drive_envelope._src.scenario.checks import choice as _choice
 from drive_envelope._src.scenario.checks import quantities as _quantities
 from drive_envelope._src.scenario.checks import read_text as _read_text
+from drive_envelope._src.scenario.checks import require as _require
 from drive_envelope._src.scenario.checks import table as _table
 from drive_envelope._src.scenario.checks import unit_for as _unit
 from drive_envelope._src.scenario.loads import (
@@ -47,6 +48,7 @@ from drive_envelope._src.units import to_si
 from drive_envelope._src.validation import check_keys as _check_keys
 
 SolverType = Literal["pgs", "tgs"]
+T = TypeVar("T")
 
 _TOP_KEYS = ("name", "description", *_SECTIONS)
 _ENVELOPE_KEYS = (
@@ -249,11 +251,18 @@ class Scenario:
             The given envelope; for a plain drive with a finite ``max_effort`` the envelope
             ``(max_effort, inf, 0, 0)``; None when the drive is unlimited.
         """
-        if self.envelope is not None:
-            return self.envelope
-        if math.isinf(self.drive.max_effort):
-            return None
-        return PerformanceEnvelope(max_effort=self.drive.max_effort, joint=self.joint.type)
+        return effective_envelope(self.envelope, self.drive, self.joint.type)
+
+
+def effective_envelope(
+    envelope: PerformanceEnvelope | None, drive: DriveSpec, joint: JointType
+) -> PerformanceEnvelope | None:
+    """``envelope``, else PhysX's plain drive ``(max_effort, inf, 0, 0)``; None when it is unlimited too."""
+    if envelope is not None:
+        return envelope
+    if math.isinf(drive.max_effort):
+        return None
+    return PerformanceEnvelope(max_effort=drive.max_effort, joint=joint)
 
 
 # -- reading ----------------------------------------------------------------------------------------
@@ -272,9 +281,17 @@ def load_scenario(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -
     Raises:
         InputError: one line naming the file, the key, the value and what was expected.
     """
+    return from_file(path, overrides, scenario_from_mapping)
+
+
+def from_file(path: str | os.PathLike[str], overrides: Sequence[str], build: Callable[..., T]) -> T:
+    """``build`` of a scenario file's mapping after the ``--set`` overrides.
+
+    ``build`` gets the file as ``source``, its folder as ``base_dir`` and its stem as ``default_name``.
+    """
     file = Path(path)
     data = apply_overrides(read_mapping(file), overrides)
-    return scenario_from_mapping(data, source=str(file), base_dir=file.parent, default_name=file.stem)
+    return build(data, source=str(file), base_dir=file.parent, default_name=file.stem)
 
 
 def scenario_from_mapping(
@@ -340,10 +357,7 @@ def _read_joint(table: Mapping[str, Any], source: str) -> JointSpec:
     keys = ("type", "inertia", "armature", "initial_position", "initial_velocity")
     _check_keys(table, keys, source, "joint")
     joint = _choice(table, "joint", "type", ("revolute", "prismatic"), source)
-    if "inertia" not in table:
-        raise InputError(
-            f"{source}: missing required key 'joint.inertia' ({_unit(joint, 'kg*m^2', 'kg')}, > 0)"
-        )
+    _require(table, "joint", {"inertia": f"{_unit(joint, 'kg*m^2', 'kg')}, > 0"}, source)
     units = {
         "inertia": _unit(joint, "kg*m**2", "kg"),
         "armature": _unit(joint, "kg*m**2", "kg"),

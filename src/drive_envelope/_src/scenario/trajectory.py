@@ -228,25 +228,22 @@ def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolut
         from drive_envelope._src.scenario.trajectory_parquet import read_parquet
 
         arrays, header = read_parquet(file, COLUMNS)
-        metadata = header.get("metadata")
-        return Trajectory(
-            joint=header["joint"],
-            engine=str(header.get("engine", "")),
-            name=str(header.get("name", "") or file.stem),
-            metadata=metadata if isinstance(metadata, dict) else {},
-            **arrays,
-        )
+        return _with_header(arrays, header, file)
     text = read_text(file)
     if suffix == ".json":
         return _from_json(text, file)
-    arrays = _csv_columns(text, file, COLUMNS)
+    return _with_header(_csv_columns(text, file, COLUMNS), {"joint": joint}, file)  # CSV has no header
+
+
+def _with_header(arrays: dict[str, FloatArray], header: dict[str, Any], file: Path) -> Trajectory:
+    """A trajectory file's columns with its header (engine, name, joint, metadata; the stem for no name)."""
+    metadata = header.get("metadata")
     return Trajectory(
-        time=arrays["time"],
-        position=arrays["position"],
-        velocity=arrays["velocity"],
-        effort=arrays["effort"],
-        joint=joint,
-        name=file.stem,
+        joint=header["joint"],
+        engine=str(header.get("engine", "")),
+        name=str(header.get("name", "") or file.stem),
+        metadata=metadata if isinstance(metadata, dict) else {},
+        **arrays,
     )
 
 
@@ -392,14 +389,4 @@ def _from_json(text: str, file: Path) -> Trajectory:
     joint = data.get("joint", "revolute")
     if joint not in ("revolute", "prismatic"):
         raise InputError(f"{file}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
-    metadata = data.get("metadata", {})
-    return Trajectory(
-        joint=joint,
-        engine=str(data.get("engine", "")),
-        name=str(data.get("name", "") or file.stem),
-        metadata=metadata if isinstance(metadata, dict) else {},
-        time=arrays["time"],
-        position=arrays["position"],
-        velocity=arrays["velocity"],
-        effort=arrays["effort"],
-    )
+    return _with_header(arrays, {**data, "joint": joint}, file)

@@ -181,6 +181,16 @@ def _is_world(scene: _Scene, joint: _Joint) -> bool:
     return not (joint.body0 in scene.links and joint.body1 in scene.links)
 
 
+def _neighbours(scene: _Scene, body: str) -> list[str]:
+    """The links one enabled, not excluded joint away from ``body``, in its joints' order."""
+    others = []
+    for path in scene.links[body]:
+        joint = scene.joints[path]
+        if not _is_world(scene, joint) and not joint.excluded:
+            others.append(joint.body1 if joint.body0 == body else joint.body0)
+    return others
+
+
 def _collect(start: str, scene: _Scene, collected: set[str]) -> list[str]:
     """The links reachable from ``start`` in the parser's depth-first order (traverseHierarchy)."""
     order: list[str] = []
@@ -191,12 +201,7 @@ def _collect(start: str, scene: _Scene, collected: set[str]) -> list[str]:
             continue
         collected.add(body)
         order.append(body)
-        nexts = []
-        for path in scene.links[body]:
-            joint = scene.joints[path]
-            if not _is_world(scene, joint) and not joint.excluded:
-                nexts.append(joint.body1 if joint.body0 == body else joint.body0)
-        stack.extend(reversed(nexts))  # visit in joint order, as the recursion does
+        stack.extend(reversed(_neighbours(scene, body)))  # visit in joint order, as the recursion does
     return order
 
 
@@ -225,12 +230,7 @@ def _choose_root(scene: _Scene, order: list[str]) -> str:
 
 def _center(scene: _Scene, order: list[str]) -> str:
     """The body with the smallest eccentricity; ties: more joints, then the earlier one (getCenterOfGraph)."""
-    neighbours: dict[str, list[str]] = {body: [] for body in order}
-    for body in order:
-        for path in scene.links[body]:
-            joint = scene.joints[path]
-            if not _is_world(scene, joint) and not joint.excluded:
-                neighbours[body].append(joint.body1 if joint.body0 == body else joint.body0)
+    neighbours = {body: _neighbours(scene, body) for body in order}
     best, best_key = "", (0, 0, 0)
     for index, body in enumerate(order):
         key = (-_eccentricity(neighbours, body), len(scene.links[body]), -index)

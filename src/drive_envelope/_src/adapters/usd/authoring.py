@@ -311,14 +311,8 @@ def _usd_values(envelope: PerformanceEnvelope, inst: str, units: StageUnits, whe
     USD keeps them as 32-bit floats: beyond 3.4e38 a value becomes inf, which for maxForce means an
     unlimited drive (and so no envelope at all) and for a slope a wrong number.
     """
-    factors = {
-        "max_effort": units.effort(inst),
-        "max_actuator_velocity": units.velocity(inst),
-        "velocity_dependent_resistance": units.per_speed(inst),
-        "speed_effort_gradient": units.speed_per_effort(inst),
-    }
     values = {}
-    for field, factor in factors.items():
+    for field, factor in _factors(units, inst).items():
         si = getattr(envelope, field)
         value = si * factor
         if math.isfinite(si) and not value <= _FLT_MAX:
@@ -329,6 +323,16 @@ def _usd_values(envelope: PerformanceEnvelope, inst: str, units: StageUnits, whe
             )
         values[field] = value
     return values
+
+
+def _factors(units: StageUnits, inst: str) -> dict[str, float]:
+    """The SI -> stage factor of each envelope field on this drive instance."""
+    return {
+        "max_effort": units.effort(inst),
+        "max_actuator_velocity": units.velocity(inst),
+        "velocity_dependent_resistance": units.per_speed(inst),
+        "speed_effort_gradient": units.speed_per_effort(inst),
+    }
 
 
 def _warn(message: str) -> None:
@@ -461,11 +465,7 @@ def _envelope_of(prim: Usd.Prim, inst: str, units: StageUnits) -> PerformanceEnv
     An unlimited maxForce gives ``max_effort = inf``: PhysX then keeps the speed line (eq. 2) alone.
     """
     max_effort, _, _ = _drive_values(prim, inst, units)
-    factors = {
-        "max_actuator_velocity": units.velocity(inst),
-        "velocity_dependent_resistance": units.per_speed(inst),
-        "speed_effort_gradient": units.speed_per_effort(inst),
-    }
+    factors = _factors(units, inst)
     where = f"joint {str(prim.GetPath())!r} ({inst})"
     values = {}
     for field, attr_name in _ATTRIBUTES.items():

@@ -190,34 +190,29 @@ def simulate(
     """
     check_steps(scenario, max_steps)
     module = engine_module(engine)
-    from drive_envelope._src.scenario.chain import ChainScenario
-
-    if isinstance(scenario, ChainScenario):  # a multi-DOF stand: the engine's chain runner
-        if not hasattr(module, "simulate_chain"):
-            raise InputError(
-                f"--engine {engine}: this engine does not run chain scenarios ([[joints]]) yet; "
-                "run it on reference, physx or mujoco"
-            )
-        import inspect
-
-        takes_progress = "progress" in inspect.signature(module.simulate_chain).parameters
-        chain: ChainTrajectory = module.simulate_chain(
-            scenario, **({"progress": progress} if progress is not None and takes_progress else {})
-        )
-        return chain
-    check_loads(scenario, engine, module)
     import inspect  # here, not at the top: the registry is imported for --help
 
-    parameters = inspect.signature(module.simulate).parameters
+    from drive_envelope._src.scenario.chain import ChainScenario
+
+    chain = isinstance(scenario, ChainScenario)  # a multi-DOF stand: the engine's chain runner
+    if not isinstance(scenario, ChainScenario):
+        check_loads(scenario, engine, module)
+    elif not hasattr(module, "simulate_chain"):
+        raise InputError(
+            f"--engine {engine}: this engine does not run chain scenarios ([[joints]]) yet; "
+            "run it on reference, physx or mujoco"
+        )
+    run = module.simulate_chain if chain else module.simulate
+    parameters = inspect.signature(run).parameters
     options: dict[str, object] = {}
     if progress is not None and "progress" in parameters:
         options["progress"] = progress
-    if schedule is not None:
+    if schedule is not None and not chain:  # a chain's drives keep their scenario targets
         if "schedule" not in parameters:
             raise InputError(f"--engine {engine}: this engine cannot replay a drive schedule")
         options["schedule"] = schedule
     try:
-        result: Trajectory = module.simulate(scenario, **options)
+        result: Trajectory | ChainTrajectory = run(scenario, **options)
     except ModuleNotFoundError as exc:
         # engines import their simulator lazily: a missing package surfaces on the first call
         raise _missing_extra(engine, (exc.name or "?").split(".")[0]) from None
