@@ -50,6 +50,7 @@ from drive_envelope._src.analysis.fit_evidence import LineEvidence, line_evidenc
 from drive_envelope._src.analysis.fit_frontier import Frontier
 from drive_envelope._src.analysis.fit_input import MAX_BOOTSTRAP, check_count, fit_samples_input
 from drive_envelope._src.analysis.fit_rounds import frontier_fit
+from drive_envelope._src.analysis.report import json_float
 from drive_envelope._src.envelope.line_model import Model
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
@@ -153,7 +154,7 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-compatible dict: the four parameters (SI) at the top level, then their uncertainties."""
         data: dict[str, Any] = {"name": self.envelope.name, "joint": self.envelope.joint}
-        data.update({p.name: _json_float(p.value) for p in self.parameters})
+        data.update({p.name: json_float(p.value) for p in self.parameters})
         data["uncertainty"] = {p.name: p.std for p in self.parameters}
         data["interval95"] = {
             p.name: None if p.interval is None else list(p.interval) for p in self.parameters
@@ -174,10 +175,6 @@ class FitResult:
         }
         data["notes"] = list(self.notes)
         return data
-
-
-def _json_float(value: float) -> float | str:
-    return value if math.isfinite(value) else ("inf" if value > 0 else "-inf")
 
 
 def _residual_summary(residuals: FloatArray) -> dict[str, Any]:

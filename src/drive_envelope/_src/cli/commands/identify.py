@@ -222,11 +222,11 @@ def _check_apart(output: str | None, envelope_output: str | None, stand: str) ->
     """
     import os
 
+    from drive_envelope._src.cli.common import same_file
     from drive_envelope._src.errors import InputError
 
-    def same(a: str, b: str) -> bool:
-        real = os.path.realpath(a) == os.path.realpath(b)
-        return real or (os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b))
+    def same(a: str, b: str) -> bool:  # also two names of one file neither of which exists yet
+        return os.path.realpath(a) == os.path.realpath(b) or same_file(a, b)
 
     if envelope_output is None:
         return

@@ -225,11 +225,11 @@ def _summary(envelope: Any, stiffness: float, damping: float) -> str:
 
 def _show(args: argparse.Namespace) -> int:
     import json
-    import math
 
     from drive_envelope._src.adapters.mujoco.bypass import other_actuators
     from drive_envelope._src.adapters.mujoco.mjcf import read_model, uses_plugin
     from drive_envelope._src.adapters.mujoco.params import model_drives
+    from drive_envelope._src.analysis.report import json_float
     from drive_envelope._src.cli.common import printed_warnings
     from drive_envelope._src.format import format_table, format_value
     from drive_envelope._src.io.envelope_file import envelope_data
@@ -239,10 +239,6 @@ def _show(args: argparse.Namespace) -> int:
     drives = model_drives(model) if uses_plugin(model) else ()
     others = other_actuators(model, drives)
     if args.format == "json":
-
-        def number(value: float) -> float | str:
-            return value if math.isfinite(value) else repr(value)
-
         data = {
             "file": args.model,
             "drives": [
@@ -251,7 +247,7 @@ def _show(args: argparse.Namespace) -> int:
                     "joint": d.joint,
                     "inputs": list(d.inputs),
                     "drive_type": d.drive_type,
-                    "dynprm": [number(v) for v in d.dynprm],
+                    "dynprm": [json_float(v) for v in d.dynprm],
                     "envelope": None if d.envelope is None else envelope_data(d.envelope),
                     "stiffness": d.stiffness,
                     "damping": d.damping,

@@ -166,10 +166,10 @@ def _check_apply_arguments(args: argparse.Namespace) -> None:
 
 def _show(args: argparse.Namespace) -> int:
     import json
-    import math
 
     from drive_envelope._src.adapters.usd.authoring import list_drives
     from drive_envelope._src.adapters.usd.stage import open_stage, stage_units
+    from drive_envelope._src.analysis.report import json_float
     from drive_envelope._src.cli.common import printed_warnings
     from drive_envelope._src.format import format_table, format_value
     from drive_envelope._src.io.envelope_file import envelope_data
@@ -179,10 +179,6 @@ def _show(args: argparse.Namespace) -> int:
         records = list_drives(stage)
     units = stage_units(stage)
     if args.format == "json":
-
-        def number(value: float) -> float | str:
-            return value if math.isfinite(value) else repr(value)
-
         data = {
             "file": args.asset,
             "meters_per_unit": units.meters_per_unit,
@@ -193,7 +189,7 @@ def _show(args: argparse.Namespace) -> int:
                     "kind": r.joint_kind,
                     "instance": r.instance,
                     "articulation": r.in_articulation,
-                    "max_effort": number(r.max_effort),
+                    "max_effort": json_float(r.max_effort),
                     "stiffness": r.stiffness,
                     "damping": r.damping,
                     "envelope": None if r.envelope is None else envelope_data(r.envelope),
