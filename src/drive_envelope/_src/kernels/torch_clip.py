@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.envelope.clamp import check_time_step
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.kernels.envelope_values import refuse_negative_response
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
     broadcast_states,
@@ -50,7 +51,6 @@ from drive_envelope._src.kernels.torch_ops import (
     clamp_effort,
     clamp_effort_implicit,
     implicit_effort_tensors,
-    refuse_negative_response,
 )
 
 if TYPE_CHECKING:
@@ -240,7 +240,7 @@ def end_of_step_effort(
 
     params = check_params(params)
     step = check_time_step(dt)
-    refuse_negative_response(response)
+    refuse_negative_response(response, device_array=torch.Tensor)
     if history is None:
         v_prev, e_prev, known = 0.0, 0.0, torch.zeros((), dtype=torch.bool, device=params.device)
     else:

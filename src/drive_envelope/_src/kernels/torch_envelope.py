@@ -180,12 +180,8 @@ class EnvelopeTensors:
             InputError: a negative, NaN or (except ``max_actuator_velocity``) infinite value, a
                 wrong unit, or shapes that do not broadcast.
         """
-        given = {
-            "max_effort": max_effort,
-            "max_actuator_velocity": max_actuator_velocity,
-            "velocity_dependent_resistance": velocity_dependent_resistance,
-            "speed_effort_gradient": speed_effort_gradient,
-        }
+        fields = (max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient)
+        given = dict(zip(ENVELOPE_FIELDS, fields, strict=True))
         where = "EnvelopeTensors.from_values"
         values = read_envelope_values({n: _host(v) for n, v in given.items()}, where)
         try:

@@ -23,15 +23,13 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from drive_envelope._src.envelope.clamp import (
     CLAMP_DRIVE_IMPULSE_ARGS,
     PX_EPS_F32,
     PX_MAX_F32,
     check_time_step,
 )
-from drive_envelope._src.errors import InputError
+from drive_envelope._src.kernels.envelope_values import refuse_negative_response
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
     broadcast_states,
@@ -296,22 +294,8 @@ def fused_clamp_drive_impulse(
     them into one loop (C++ on the CPU, Triton on CUDA), which is what makes the implicit clamp
     cheap at RL scale. The first call for a new dtype, device, rank or mode compiles (about a
     minute on two CPU cores; PyTorch caches the result on disk), so use it in long runs, not one-off
-    calls. It needs what ``torch.compile`` needs (a C++ compiler for the CPU backend).
-
-    Args:
-        joint_vel0: Joint velocity containing ``drive_impulse0`` [rad/s or m/s].
-        drive_impulse0: Total drive impulse applied so far this step [N*m*s or N*s].
-        drive_impulse: Requested total drive impulse [N*m*s or N*s].
-        response: Joint velocity change per unit impulse [rad/s/(N*m*s) or m/s/(N*s)].
-        max_joint_vel: ``maxActuatorVelocity`` [rad/s or m/s] (``inf`` allowed).
-        max_impulse: ``maxEffort * dt`` [N*m*s or N*s].
-        speed_impulse_gradient: ``speedEffortGradient / dt`` [(rad/s)/(N*m*s) or (m/s)/(N*s)].
-        velocity_dependent_resistance: ``velocityDependentResistance * dt`` [N*m*s/rad or N*s/m].
-        dtype: As in :func:`clamp_drive_impulse`.
-        physx_exact: As in :func:`clamp_drive_impulse`.
-
-    Returns:
-        The clamped total impulse [N*m*s or N*s], as :func:`clamp_drive_impulse`.
+    calls. It needs what ``torch.compile`` needs (a C++ compiler for the CPU backend). The arguments,
+    their units and the result are those of :func:`clamp_drive_impulse`.
     """
     values = (
         joint_vel0,
@@ -470,9 +454,11 @@ def clamp_effort_implicit(
     Raises:
         InputError: a bad ``dt``, ``params``, dtype or shape, or a negative ``response`` on the host.
     """
+    import torch
+
     params = check_params(params)
     step = check_time_step(dt)
-    refuse_negative_response(response)
+    refuse_negative_response(response, device_array=torch.Tensor)
     tau, v, r, applied = state_tensors(
         params,
         requested_effort=requested_effort,
@@ -484,17 +470,6 @@ def clamp_effort_implicit(
         "clamp_effort_implicit", params, requested_effort=tau, velocity=v, response=r, applied_effort=applied
     )
     return implicit_effort_tensors(tau, v, applied, r, *params.as_tuple(), step)
-
-
-def refuse_negative_response(response: Any) -> None:
-    """A negative ``response`` given on the host (number, list, NumPy): InputError; a tensor is not read."""
-    import torch
-
-    if not isinstance(response, torch.Tensor):
-        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
-        if negative.any():
-            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
-            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
 
 
 def implicit_effort_tensors(

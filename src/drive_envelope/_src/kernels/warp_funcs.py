@@ -9,10 +9,11 @@ and the launch wrappers (:mod:`drive_envelope._src.kernels.warp_ops`) import it,
 overload per type. The module-private ``_..._kernel`` kernels work on float32 arrays and back the
 launch wrappers.
 
-``clamp_drive_impulse_func`` is the literal port of PhysX's ``clampDriveImpulse``
-(``physx/source/lowleveldynamics/shared/DyCpuGpuArticulation.h``), both request signs, with the
-default guard of :func:`drive_envelope.clamp_drive_impulse` (cap kept, never NaN) or, with
-``physx_exact=True``, PhysX's arithmetic bit for bit: absolute epsilon ``2^-23`` on the denominators
+``clamp_drive_impulse_func`` is the port of PhysX's ``clampDriveImpulse``
+(``physx/source/lowleveldynamics/shared/DyCpuGpuArticulation.h``) with the default guard of
+:func:`drive_envelope.clamp_drive_impulse` (cap kept, never NaN; both request signs through the
+positive branch, as in the NumPy core) or, with ``physx_exact=True``, the literal port of both
+branches, PhysX's arithmetic bit for bit: absolute epsilon ``2^-23`` on the denominators
 ``response -/+ gradient``, ``FLT_MAX`` sentinels, ``PxMax(a, b) = a > b ? a : b`` and
 ``PxMin(a, b) = a < b ? a : b`` (which decide what a NaN turns into, hence ``wp.where`` and not
 ``wp.max``/``wp.min``).
@@ -185,24 +186,6 @@ def _bounds_positive(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: An
 
 
 @wp.func
-def _bounds_negative(dev: Any, limit: Any, denom1: Any, denom2: Any, impulse: Any, tol: Any):
-    """The guarded ``computeBoundsForNegativeImpulse`` (a NaN upper bound where a flat curve says no)."""
-    zero, eps = type(dev)(0.0), type(dev)(_EPS)
-    if wp.abs(denom1) < tol:
-        return type(dev)(-_INF), type(dev)(_INF)
-    if wp.abs(denom2) < tol:
-        upper = type(dev)(wp.nan)
-        if wp.abs(dev + limit) < eps or (dev + limit) >= zero:
-            upper = zero
-        return _quotient(dev, type(limit)(-1.0) * limit, denom1), upper
-    bound1 = _quotient(dev, type(limit)(-1.0) * limit, denom1)
-    bound2 = _quotient(dev, limit, denom2)
-    if denom2 >= zero:
-        return _max_nan(bound1, impulse), _min_nan(zero, bound2)
-    return _max_nan(_max_nan(bound1, bound2), impulse), zero
-
-
-@wp.func
 def _clamp_impulse_physx(
     joint_vel0: Any,
     drive_impulse0: Any,
@@ -219,6 +202,8 @@ def _clamp_impulse_physx(
     dev = drive_impulse0 * response - joint_vel0
     resist = velocity_dependent_resistance
     grad = speed_impulse_gradient
+    inv = one / resist  # used where resist != 0 only
+    limit = max_impulse / resist
     lo1, hi1 = zero, zero
     lo2, hi2 = type(max_impulse)(-1.0) * max_impulse, max_impulse  # (Warp's -x is 0 - x: -0.0 lost)
     if drive_impulse > zero:
@@ -226,16 +211,12 @@ def _clamp_impulse_physx(
             dev, max_joint_vel, response - grad, response + grad, drive_impulse, tol
         )
         if resist != zero:
-            inv = one / resist
-            limit = max_impulse / resist
             lo2, hi2 = _bounds_positive_physx(dev, limit, response - inv, response + inv, drive_impulse, tol)
     else:
         lo1, hi1 = _bounds_negative_physx(
             dev, max_joint_vel, response + grad, response - grad, drive_impulse, tol
         )
         if resist != zero:
-            inv = one / resist
-            limit = max_impulse / resist
             lo2, hi2 = _bounds_negative_physx(dev, limit, response + inv, response - inv, drive_impulse, tol)
     lower = _px_max(lo1, lo2)
     upper = _px_min(hi1, hi2)
@@ -256,32 +237,32 @@ def _clamp_impulse(
     velocity_dependent_resistance: Any,
     tol: Any,
 ):
-    """The guarded ``clampDriveImpulse`` (the default): |result| <= max_impulse, no NaN."""
+    """The guarded ``clampDriveImpulse`` (the default): |result| <= max_impulse, no NaN.
+
+    As in the NumPy core, both request signs take the positive branch on sign-normalized inputs
+    (``dev`` and the request times ``s = +-1``, the result times ``s``): the negative branch's
+    numbers, up to the sign of a zero. A zero or NaN request takes ``s = -1`` (both give 0).
+    """
     zero, one = type(joint_vel0)(0.0), type(joint_vel0)(1.0)
-    dev = drive_impulse0 * response - joint_vel0
+    sign = wp.where(drive_impulse > zero, one, type(one)(-1.0))
+    request = drive_impulse * sign
+    dev = (drive_impulse0 * response - joint_vel0) * sign
     resist = velocity_dependent_resistance
     grad = speed_impulse_gradient
     inv = one / resist
     limit = max_impulse / resist
-    # a resistance whose 1/R or max_impulse/R overflows acts as R = 0 (inf - inf and NaN are not 0)
-    plain = resist == zero or (inv - inv) + (limit - limit) != zero
-    lo1, hi1 = zero, zero
+    lo1, hi1 = _bounds_positive(dev, max_joint_vel, response - grad, response + grad, request, tol)
     lo2, hi2 = type(dev)(-_INF), type(dev)(_INF)
-    if drive_impulse > zero:
-        lo1, hi1 = _bounds_positive(dev, max_joint_vel, response - grad, response + grad, drive_impulse, tol)
-        if not plain:
-            lo2, hi2 = _bounds_positive(dev, limit, response - inv, response + inv, drive_impulse, tol)
-    else:
-        lo1, hi1 = _bounds_negative(dev, max_joint_vel, response + grad, response - grad, drive_impulse, tol)
-        if not plain:
-            lo2, hi2 = _bounds_negative(dev, limit, response + inv, response - inv, drive_impulse, tol)
+    # a resistance whose 1/R or max_impulse/R overflows acts as R = 0 (inf - inf and NaN are not 0)
+    if not (resist == zero or (inv - inv) + (limit - limit) != zero):
+        lo2, hi2 = _bounds_positive(dev, limit, response - inv, response + inv, request, tol)
     # |x| <= max_impulse bounds the interval (implied by eq. 1, kept through rounding)
     lower = _max_nan(_max_nan(lo1, lo2), type(max_impulse)(-1.0) * max_impulse)
     upper = _min_nan(_min_nan(hi1, hi2), max_impulse)
-    clamped = _min_nan(upper, _max_nan(lower, drive_impulse))
+    clamped = _min_nan(upper, _max_nan(lower, request))
     if not (lower <= upper) or clamped != clamped:  # empty, or a NaN: the drive lets go
         return zero
-    return clamped
+    return clamped * sign
 
 
 @wp.func
@@ -514,8 +495,8 @@ def _clamp_effort_implicit_kernel(
     requested_effort: wp.array[wp.float32],
     velocity: wp.array[wp.float32],
     response: wp.array[wp.float32],
-    dt: wp.float32,
     applied_effort: wp.array[wp.float32],
+    dt: wp.float32,
     clamped: wp.array[wp.float32],
 ):
     """clamped[i] = clampDriveImpulse(e*dt) / dt at the end-of-step velocity v + r*dt*(e - e0), DOF i."""

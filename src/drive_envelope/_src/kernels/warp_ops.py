@@ -22,7 +22,11 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS, check_time_step
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
+from drive_envelope._src.kernels.envelope_values import (
+    envelope_columns,
+    read_envelope_values,
+    refuse_negative_response,
+)
 from drive_envelope._src.validation import broadcast_shape
 
 
@@ -134,15 +138,8 @@ class EnvelopeArrays:
         where = "EnvelopeArrays.from_values"
         if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 0):
             raise InputError(f"{where}: count: expected a number of DOFs >= 0, got {count!r}")
-        raw = read_envelope_values(
-            {
-                "max_effort": max_effort,
-                "max_actuator_velocity": max_actuator_velocity,
-                "velocity_dependent_resistance": velocity_dependent_resistance,
-                "speed_effort_gradient": speed_effort_gradient,
-            },
-            where,
-        )
+        given = (max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient)
+        raw = read_envelope_values(dict(zip(ENVELOPE_FIELDS, given, strict=True)), where)
         try:
             shape = np.broadcast_shapes(*(a.shape for a in raw.values()), () if count is None else (count,))
         except ValueError:
@@ -198,26 +195,29 @@ def _output(out: Any, count: int, device: Any) -> Any:
     return _as_array(out, count, device, "out")
 
 
+def _check_params(params: object) -> EnvelopeArrays:
+    if not isinstance(params, EnvelopeArrays):
+        raise InputError(f"params: expected an EnvelopeArrays, got {type(params).__name__}")
+    return params
+
+
 def _launch(kernel: Any, n: int, inputs: list[Any], result: Any, device: Any) -> None:
     """Launch ``kernel`` over ``n`` DOFs into ``result``; no launch at all for ``n = 0``."""
     if n:
         _warp().launch(kernel, dim=n, inputs=inputs, outputs=[result], device=device)
 
 
-def _check_response(response: Any) -> Any:
-    """Refuse a negative ``response`` given on the host; a Warp array is not read (no device copy)."""
-    if not _is_warp_array(response):
-        negative = np.asarray(response, dtype=np.float64) < 0.0  # NaN is not refused: it lets go
-        if negative.any():
-            bad = float(np.asarray(response, dtype=np.float64)[negative].flat[0])
-            raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
-    return response
+def _launch_per_dof(kernel: Any, params: object, out: Any, *scalars: Any, **states: Any) -> Any:
+    """Launch ``kernel`` on ``params``, the per-DOF ``states`` (in order) and ``scalars``, into ``out``.
 
-
-def _check_params(params: object) -> EnvelopeArrays:
-    if not isinstance(params, EnvelopeArrays):
-        raise InputError(f"params: expected an EnvelopeArrays, got {type(params).__name__}")
-    return params
+    The kernel's arguments are the four envelope arrays, the states, the scalars, the result.
+    """
+    params = _check_params(params)
+    n, device = params.count, params.device
+    result = _output(out, n, device)
+    arrays = [_as_array(value, n, device, name) for name, value in states.items()]
+    _launch(kernel, n, [*params.as_inputs(), *arrays, *scalars], result, device)
+    return result
 
 
 def effort_limit(params: EnvelopeArrays, velocity: Any, *, out: Any = None) -> Any:
@@ -232,12 +232,7 @@ def effort_limit(params: EnvelopeArrays, velocity: Any, *, out: Any = None) -> A
         The limit [N*m or N], float32 Warp array ``(N,)`` on ``params.device``: 0 at a NaN
         velocity, the limit at infinite speed at an infinite one (``docs/kernels.md``).
     """
-    params = _check_params(params)
-    n, device = params.count, params.device
-    result = _output(out, n, device)
-    inputs = [*params.as_inputs(), _as_array(velocity, n, device, "velocity")]
-    _launch(_funcs()._effort_limit_kernel, n, inputs, result, device)
-    return result
+    return _launch_per_dof(_funcs()._effort_limit_kernel, params, out, velocity=velocity)
 
 
 def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any = None) -> Any:
@@ -252,16 +247,7 @@ def clamp_effort(params: EnvelopeArrays, effort: Any, velocity: Any, *, out: Any
     Returns:
         Clamped effort [N*m or N], float32 Warp array ``(N,)``; a NaN effort or velocity gives 0.
     """
-    params = _check_params(params)
-    n, device = params.count, params.device
-    result = _output(out, n, device)
-    inputs = [
-        *params.as_inputs(),
-        _as_array(effort, n, device, "effort"),
-        _as_array(velocity, n, device, "velocity"),
-    ]
-    _launch(_funcs()._clamp_effort_kernel, n, inputs, result, device)
-    return result
+    return _launch_per_dof(_funcs()._clamp_effort_kernel, params, out, effort=effort, velocity=velocity)
 
 
 def clamp_effort_implicit(
@@ -295,20 +281,12 @@ def clamp_effort_implicit(
     Raises:
         InputError: a bad ``dt``, shape, dtype or device, or a negative ``response`` on the host.
     """
-    params = _check_params(params)
+    _check_params(params)  # before dt, as every backend checks them
     step = check_time_step(dt)
-    n, device = params.count, params.device
-    result = _output(out, n, device)
-    inputs = [
-        *params.as_inputs(),
-        _as_array(requested_effort, n, device, "requested_effort"),
-        _as_array(velocity, n, device, "velocity"),
-        _as_array(_check_response(response), n, device, "response"),
-        step,
-        _as_array(applied_effort, n, device, "applied_effort"),
-    ]
-    _launch(_funcs()._clamp_effort_implicit_kernel, n, inputs, result, device)
-    return result
+    refuse_negative_response(response, device_array=_warp().array)
+    kernel = _funcs()._clamp_effort_implicit_kernel
+    states = {"requested_effort": requested_effort, "velocity": velocity, "response": response}
+    return _launch_per_dof(kernel, params, out, step, **states, applied_effort=applied_effort)
 
 
 def clamp_drive_impulse(
@@ -369,9 +347,7 @@ def clamp_drive_impulse(
     n = int(np.prod(shape, dtype=np.int64))
     inputs = [_as_array(v, n, device, name) for v, name in zip(values, CLAMP_DRIVE_IMPULSE_ARGS, strict=True)]
     result = wp.empty(n, dtype=wp.float32, device=device)
-    if n:
-        kernel = _funcs()._clamp_drive_impulse_kernel
-        wp.launch(kernel, dim=n, inputs=[*inputs, bool(physx_exact)], outputs=[result], device=device)
+    _launch(_funcs()._clamp_drive_impulse_kernel, n, [*inputs, bool(physx_exact)], result, device)
     # Warp has no 0-d arrays: all-scalar arguments give shape (1,)
     return result.reshape(shape) if len(shape) > 1 else result
 
