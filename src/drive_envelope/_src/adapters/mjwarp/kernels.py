@@ -41,7 +41,7 @@ class DriveArrays:
     dof: wp.array[wp.int32]
     qpos: wp.array[wp.int32]
     actuator: wp.array[wp.int32]
-    inputs: wp.array[wp.int32]  # 3 per drive, as all the (ndrive, 3) tables
+    inputs: wp.array[wp.int32]  # this and the other (ndrive, 3) tables flattened: 3 per drive
     acceleration: wp.array[wp.int32]
     enabled: wp.array[wp.int32]
     input_enabled: wp.array[wp.int32]
