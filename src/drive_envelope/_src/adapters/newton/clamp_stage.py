@@ -82,6 +82,12 @@ class ClampingPerformanceEnvelope(ClampingBase):  # type: ignore[misc,valid-type
                                         "max_actuator_velocity": 8.0, "speed_effort_gradient": 0.5})])
     """
 
+    # the per-DOF float32 arrays of ENVELOPE_FIELDS (columns of the packed block once bound)
+    max_effort: Any
+    max_actuator_velocity: Any
+    velocity_dependent_resistance: Any
+    speed_effort_gradient: Any
+
     @classmethod
     def resolve_arguments(cls, args: dict[str, Any]) -> dict[str, Any]:
         """Validate scalar arguments (SI numbers or strings with units) and fill defaults."""
@@ -102,31 +108,20 @@ class ClampingPerformanceEnvelope(ClampingBase):  # type: ignore[misc,valid-type
             velocity_dependent_resistance: R [N*m*s/rad or N*s/m]; ``None``: 0.
             speed_effort_gradient: G [(rad/s)/(N*m) or (m/s)/N]; ``None``: 0.
         """
-        for name, array in zip(
-            ENVELOPE_FIELDS,
-            (max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient),
-            strict=True,
-        ):
+        given = (max_effort, max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient)
+        for name, array in zip(ENVELOPE_FIELDS, given, strict=True):
             if array is not None and not isinstance(array, wp.array):
                 raise InputError(
                     f"ClampingPerformanceEnvelope: {name}: expected a float32 wp.array of shape (N,) "
                     f"(pass scalars through builder.add_actuator), got {type(array).__name__}"
                 )
         n, device = max_effort.shape, max_effort.device
-        if max_actuator_velocity is None:
-            max_actuator_velocity = wp.full(n, math.inf, dtype=wp.float32, device=device)
-        if velocity_dependent_resistance is None:
-            velocity_dependent_resistance = wp.zeros(n, dtype=wp.float32, device=device)
-        if speed_effort_gradient is None:
-            speed_effort_gradient = wp.zeros(n, dtype=wp.float32, device=device)
-        given = (max_actuator_velocity, velocity_dependent_resistance, speed_effort_gradient)
-        for name, array in zip(ENVELOPE_FIELDS[1:], given, strict=True):
-            if array.shape != n:
+        for name, array, default in zip(ENVELOPE_FIELDS, given, (None, math.inf, 0.0, 0.0), strict=True):
+            if array is None:
+                array = wp.full(n, default, dtype=wp.float32, device=device)
+            elif array.shape != n:
                 raise InputError(f"{name} shape {array.shape} must match max_effort shape {n}")
-        self.max_effort = max_effort
-        self.max_actuator_velocity = max_actuator_velocity
-        self.velocity_dependent_resistance = velocity_dependent_resistance
-        self.speed_effort_gradient = speed_effort_gradient
+            setattr(self, name, array)
 
     evaluate_clamp = _evaluate_envelope_clamp  # type: ignore[assignment]  # a wp.Function at runtime
 

@@ -86,22 +86,16 @@ def _check_source(source: Any) -> None:
     )
 
 
-def _name(source: Any) -> str:
-    if isinstance(source, (str, os.PathLike)):
-        return os.fspath(source)
-    layer = source.GetRootLayer()
-    return str(layer.realPath or layer.identifier)
-
-
-def _open(source: Any) -> Any:
-    """The stage of ``source``: a path opened through the USD adapter, or a ``Usd.Stage`` as it is."""
+def _open(source: Any) -> tuple[str, Any]:
+    """The name and stage of ``source``: a path opened through the USD adapter, or a ``Usd.Stage``."""
     from drive_envelope._src.adapters.usd.stage import open_stage
 
     if isinstance(source, (str, os.PathLike)):
         # not strict: add_usd may have built USD's schema registry first; the envelope is read from
         # the layers' apiSchemas and authored attributes (authoring.has_envelope_api)
-        return open_stage(source, strict=False)
-    return source
+        return os.fspath(source), open_stage(source, strict=False)
+    layer = source.GetRootLayer()
+    return str(layer.realPath or layer.identifier), source
 
 
 def _check_units(stage: Any, where: str) -> None:
@@ -183,10 +177,8 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
 
     _check_builder(builder)
     _check_source(source)
-    name = _name(source)
-    stage = _open(source)
+    name, stage = _open(source)
     _check_units(stage, name)
-    clamp_class = ClampingPerformanceEnvelope
     joints = _joints_by_label(builder)
     actuated = _actuated_dofs(builder)
     added = []
@@ -220,7 +212,7 @@ def add_envelopes_from_usd(builder: Any, source: Any) -> list[UsdEnvelopeActuato
                 pos_index=coord,
                 kp=record.stiffness,
                 kd=record.damping,
-                clamping=[(clamp_class, envelope)],
+                clamping=[(ClampingPerformanceEnvelope, envelope)],
             )
             # Newton's own drive would apply the same PD law a second time, unclamped
             builder.joint_target_ke[dof] = 0.0
