@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 import importlib.resources
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib.resources.abc import Traversable
 
@@ -168,14 +169,14 @@ def _split_comment(value: str, comment: str | None) -> tuple[str, str]:
     return value.strip(), (comment or "").strip()
 
 
-def load_catalog_datasheet(name: str) -> Datasheet:
-    """Read a catalog actuator by key or name.
+def load_catalog_datasheet(name: str, *, overrides: Mapping[str, object] | None = None) -> Datasheet:
+    """Read a catalog actuator by key or name (``overrides``: ``section.key`` values, as ``derive --set``).
 
     Raises:
-        InputError: no such catalog actuator (with the nearest key).
+        InputError: no such catalog actuator (with the nearest key), or a bad override.
     """
     key = _key(name)
-    return datasheet_from_mapping(_read(_files()[key], key), source=f"catalog:{key}")
+    return datasheet_from_mapping(_read(_files()[key], key), source=f"catalog:{key}", overrides=overrides)
 
 
 def _key(name: str) -> str:

@@ -72,11 +72,21 @@ def _resolve(spec: object, base: str | os.PathLike[str] | None, duty: str) -> Pe
         if not is_datasheet_mapping(data):
             return envelope_from_mapping(data, source=str(path))
         sheet = datasheet_from_mapping(data, source=str(path))
-    elif Path(spec).suffix.lower() in _FILE_SUFFIXES or "/" in os.fspath(spec):
-        raise InputError(f"{os.fspath(spec)}: no such file")
     else:
+        refuse_missing_file(os.fspath(spec))
         sheet = load_catalog_datasheet(os.fspath(spec))
     return derive(sheet, duty="peak" if duty == "peak" else "continuous").envelope
+
+
+def refuse_missing_file(spec: str) -> None:
+    """Refuse a missing ``spec`` that names a file (a file's suffix, a folder), not a catalog actuator.
+
+    Raises:
+        InputError: ``spec``: no such file (or its name is too long).
+    """
+    if Path(spec).suffix.lower() in _FILE_SUFFIXES or "/" in spec:
+        check_path_name(spec)
+        raise InputError(f"{spec}: no such file")
 
 
 def _find_file(spec: str, base: str | os.PathLike[str] | None) -> Path | None:

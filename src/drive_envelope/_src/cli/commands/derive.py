@@ -68,6 +68,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import load_datasheet
     from drive_envelope._src.datasheet.report import derivation_report, envelope_text
+    from drive_envelope._src.datasheet.resolve import refuse_missing_file
     from drive_envelope._src.io.atomic import atomic_write_text
 
     output = checked_output(args.output)
@@ -77,14 +78,8 @@ def _run(args: argparse.Namespace) -> int:
     if os.path.exists(args.spec):  # not is_file(): a FIFO or a device is refused by type when read
         sheet = load_datasheet(args.spec, overrides=overrides)
     else:
-        _check_not_a_path(args.spec)
-        sheet = load_catalog_datasheet(args.spec)
-        if overrides:
-            from drive_envelope._src.datasheet.catalog import catalog_text
-            from drive_envelope._src.datasheet.load import datasheet_from_mapping
-
-            data = _toml(catalog_text(args.spec), sheet.source)
-            sheet = datasheet_from_mapping(data, source=sheet.source, overrides=overrides)
+        refuse_missing_file(args.spec)
+        sheet = load_catalog_datasheet(args.spec, overrides=overrides)
     derivation = derive(
         sheet, duty=args.duty, gradient_method=args.gradient_method, approximate_line=args.approximate_line
     )
@@ -123,29 +118,6 @@ def _overrides(items: list[str]) -> dict[str, object]:
             raise InputError(f"--set {key.strip()!r} given twice; give each key once")
         result[key.strip()] = value.strip()
     return result
-
-
-def _check_not_a_path(spec: str) -> None:
-    from pathlib import Path
-
-    from drive_envelope._src.errors import InputError
-
-    if Path(spec).suffix.lower() in (".toml", ".json", ".yaml", ".yml") or "/" in spec:
-        from drive_envelope._src.io.paths import check_path_name
-
-        check_path_name(spec)
-        raise InputError(f"{spec}: no such file")
-
-
-def _toml(text: str, source: str) -> dict[str, Any]:
-    import tomllib
-
-    from drive_envelope._src.errors import InputError
-
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{source}: malformed TOML: {exc}") from None
 
 
 _OUTPUT_FORMATS = {".toml": "toml", ".json": "envelope-json", ".usda": "usd-snippet", ".usd": "usd-snippet"}
