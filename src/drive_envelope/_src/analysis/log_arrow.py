@@ -23,7 +23,8 @@ FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 
 
-def _one_line(exc: BaseException) -> str:
+def one_line(exc: BaseException) -> str:
+    """A reader's error as one line of text (the CSV and Parquet readers' messages quote it)."""
     return " ".join(str(exc).split()) or type(exc).__name__
 
 
@@ -71,7 +72,7 @@ def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -
         # pre-buffering keeps every row group read so far in memory: off, to stream in bounded memory
         handle = pq.ParquetFile(path, pre_buffer=False, buffer_size=1 << 22)
     except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{label}: cannot read as Parquet: {_one_line(exc)}") from None
+        raise InputError(f"{label}: cannot read as Parquet: {one_line(exc)}") from None
     with contextlib.closing(handle):
         plan = log_plan(handle.schema_arrow.names, columns, label)
         names = {role: handle.schema_arrow.names[position] for role, position in plan.position.items()}
@@ -89,7 +90,7 @@ def iter_parquet(path: Path, columns: LogColumns, chunk_rows: int, label: str) -
                 yield make_chunk(plan, arrays, joint, codes, row)
                 row += batch.num_rows
         except (pa.ArrowException, OSError) as exc:  # a damaged row group
-            raise InputError(f"{label}: cannot read near row {row}: {_one_line(exc)}") from None
+            raise InputError(f"{label}: cannot read near row {row}: {one_line(exc)}") from None
 
 
 def _table_names(table: Any) -> list[str]:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from drive_envelope._src.analysis.columns import ColumnPlan
-from drive_envelope._src.analysis.log_arrow import arrow_joint
+from drive_envelope._src.analysis.log_arrow import arrow_joint, one_line
 from drive_envelope._src.analysis.log_model import JointCodes, LogChunk, LogColumns, log_plan, make_chunk
 from drive_envelope._src.errors import InputError
 
@@ -32,10 +32,6 @@ FIELD_LIMIT = csv.field_size_limit()
 _LINE_LIMIT = 1 << 20  # longest comment or header line read [characters]: memory stays bounded
 _READ_ERRORS = (OSError, EOFError, UnicodeDecodeError, zlib.error, csv.Error)  # a damaged or truncated file
 _Source = tuple[Path, int, str]  # (path, lines before the header, delimiter): where to read a cell again
-
-
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 def _open_text(path: Path) -> io.TextIOBase:
@@ -74,13 +70,13 @@ def csv_header(path: Path, label: str) -> tuple[int, list[str], str]:
         with _open_text(path) as handle:
             skip, line = _header_line(handle, label)
     except _READ_ERRORS as exc:
-        raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+        raise InputError(f"{label}: cannot read: {one_line(exc)}") from None
     delimiter = max((",", ";", "\t"), key=line.count)
     try:
         header = next(csv.reader([line], delimiter=delimiter))
     except csv.Error as exc:  # a field over FIELD_LIMIT characters
         raise InputError(
-            f"{label}: line {skip + 1} (the header): {_one_line(exc)}; expected column names"
+            f"{label}: line {skip + 1} (the header): {one_line(exc)}; expected column names"
         ) from None
     return skip, [name.strip() for name in header], delimiter
 
@@ -132,9 +128,9 @@ def iter_csv_arrow(path: Path, columns: LogColumns, chunk_rows: int, label: str)
         # pyarrow's message has no reliable row number: rescan with the standard library for one
         for _ in iter_csv_python(path, columns, chunk_rows, label):
             pass
-        raise InputError(f"{label}: cannot read as CSV: {_one_line(exc)}") from None
+        raise InputError(f"{label}: cannot read as CSV: {one_line(exc)}") from None
     except (OSError, pa.ArrowException) as exc:  # a truncated .gz, an I/O error
-        raise InputError(f"{label}: cannot read near row {row}: {_one_line(exc)}") from None
+        raise InputError(f"{label}: cannot read near row {row}: {one_line(exc)}") from None
 
 
 def _take(parts: list[dict[str, Any]], rows: int) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -167,13 +163,13 @@ def iter_csv_python(path: Path, columns: LogColumns, chunk_rows: int, label: str
             for _ in range(skip + 1):
                 handle.readline()
         except _READ_ERRORS as exc:
-            raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+            raise InputError(f"{label}: cannot read: {one_line(exc)}") from None
         reader = csv.reader(handle, delimiter=delimiter)
         while True:
             try:
                 block = [fields for fields in itertools.islice(reader, chunk_rows) if fields]
             except _READ_ERRORS as exc:
-                raise InputError(f"{label}: cannot read near row {row}: {_one_line(exc)}") from None
+                raise InputError(f"{label}: cannot read near row {row}: {one_line(exc)}") from None
             if not block:
                 return
             for offset, fields in enumerate(block):
@@ -221,7 +217,7 @@ def csv_rows(path: Path, label: str) -> tuple[list[str], list[list[str]]]:
     try:
         rows = [fields for fields, _ in _data_rows(path, skip, delimiter)]
     except _READ_ERRORS as exc:
-        raise InputError(f"{label}: cannot read: {_one_line(exc)}") from None
+        raise InputError(f"{label}: cannot read: {one_line(exc)}") from None
     return header, rows
 
 
