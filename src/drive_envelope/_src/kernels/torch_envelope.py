@@ -45,9 +45,7 @@ def resolve_dtype(dtype: Any, *values: object) -> torch.dtype:
     try:
         name = np.dtype(dtype).name
     except TypeError:
-        raise InputError(
-            f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}"
-        ) from None
+        name = ""  # not a dtype at all: the same message
     mapping = {"float16": torch.float16, "float32": torch.float32, "float64": torch.float64}
     if name not in mapping:
         raise InputError(f"dtype: expected a float dtype (numpy.float32, torch.float64, ...), got {dtype!r}")

@@ -124,14 +124,13 @@ def _build(scenario: Scenario, *, actuator: bool) -> Any:
     if scenario.joint.type == "revolute":
         mass, com, about_com = _link(inertia, pendulum)
         link = builder.add_link(mass=mass, com=wp.vec3(*com), inertia=wp.mat33(np.eye(3) * about_com))
-        joint = builder.add_joint_revolute(
-            parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
-        )
+        add_joint: Callable[..., int] = builder.add_joint_revolute
     else:
         link = builder.add_link(mass=inertia, inertia=wp.mat33(np.eye(3)))
-        joint = builder.add_joint_prismatic(
-            parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
-        )
+        add_joint = builder.add_joint_prismatic
+    joint = add_joint(
+        parent=-1, child=link, axis=newton.Axis.X, target_ke=0.0, target_kd=0.0, armature=armature
+    )
     builder.add_articulation([joint])
     if actuator:
         kp, kd = _gains(scenario)
