@@ -20,7 +20,7 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, TextIO
+from typing import TYPE_CHECKING, Any, Literal, TextIO
 
 import numpy as np
 import numpy.typing as npt
@@ -29,6 +29,9 @@ from drive_envelope._src.envelope.model import JointType
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.atomic import atomic_path
 from drive_envelope._src.io.files import read_text
+
+if TYPE_CHECKING:
+    from drive_envelope._src.scenario.spec import Scenario
 
 COLUMNS = ("time", "position", "velocity", "effort")
 """CSV header, in order."""
@@ -113,6 +116,31 @@ class Trajectory:
             "units": self.units,
             "metadata": self.metadata,
         }
+
+
+def stand_run(
+    scenario: Scenario,
+    engine: str,
+    position: FloatArray,
+    velocity: FloatArray,
+    effort: FloatArray,
+    **metadata: Any,
+) -> Trajectory:
+    """An engine's run of ``scenario``: rows from t = 0 every ``dt`` [s], its joint type and name.
+
+    The metadata holds the scenario's solver settings and then ``metadata`` (precision, effort source).
+    """
+    sim = scenario.simulation
+    return Trajectory(
+        time=np.arange(position.shape[0], dtype=np.float64) * sim.dt,
+        position=position,
+        velocity=velocity,
+        effort=effort,
+        joint=scenario.joint.type,
+        engine=engine,
+        name=scenario.name,
+        metadata={**sim.metadata(), **metadata},
+    )
 
 
 def trajectory_format(path: str | os.PathLike[str], format: str | None = None) -> TrajectoryFormat:
@@ -223,16 +251,30 @@ def read_trajectory(path: str | os.PathLike[str], *, joint: JointType = "revolut
         InputError: missing file, a missing or repeated column, or a cell that is not a finite number.
     """
     file = Path(path)
-    suffix = file.suffix.lower()
-    if _SUFFIXES.get(suffix) == "parquet":
-        from drive_envelope._src.scenario.trajectory_parquet import read_parquet
+    if not _has_header(file):
+        return _with_header(_csv_columns(read_text(file), file, COLUMNS), {"joint": joint}, file)
+    arrays, header = _columns_and_header(file, COLUMNS)
+    kind = header.get("joint", "revolute")  # a Parquet file's header has it checked already
+    if kind not in ("revolute", "prismatic"):
+        raise InputError(f"{file}: key 'joint': expected 'revolute' or 'prismatic', got {kind!r}")
+    return _with_header(arrays, {**header, "joint": kind}, file)
 
-        arrays, header = read_parquet(file, COLUMNS)
-        return _with_header(arrays, header, file)
-    text = read_text(file)
-    if suffix == ".json":
-        return _from_json(text, file)
-    return _with_header(_csv_columns(text, file, COLUMNS), {"joint": joint}, file)  # CSV has no header
+
+def _has_header(file: Path) -> bool:
+    """Whether a trajectory file is JSON or Parquet (with a header), not CSV."""
+    return file.suffix.lower() == ".json" or _SUFFIXES.get(file.suffix.lower()) == "parquet"
+
+
+def _columns_and_header(
+    file: Path, required: tuple[str, ...], optional: tuple[str, ...] = ()
+) -> tuple[dict[str, FloatArray], dict[str, Any]]:
+    """The ``required`` (and present ``optional``) columns of a JSON or Parquet file, and its header."""
+    if file.suffix.lower() == ".json":
+        data = _json_object(read_text(file), file)
+        return _json_columns(data, file, required, optional), data
+    from drive_envelope._src.scenario.trajectory_parquet import read_parquet
+
+    return read_parquet(file, required, optional=optional)
 
 
 def _with_header(arrays: dict[str, FloatArray], header: dict[str, Any], file: Path) -> Trajectory:
@@ -280,24 +322,15 @@ def read_operating_log(path: str | os.PathLike[str]) -> OperatingLog:
             columns of different lengths (JSON), or a value that is not a finite number.
     """
     file = Path(path)
-    suffix = file.suffix.lower()
-    if _SUFFIXES.get(suffix) == "parquet":
-        from drive_envelope._src.scenario.trajectory_parquet import read_parquet
-
-        arrays, header = read_parquet(file, _POINTS, optional=_POINTS_OPTIONAL)
-        engine, name = header.get("engine", ""), header.get("name", "")
-    else:
-        if suffix != ".json":
-            raise InputError(f"{file}: expected a JSON or Parquet trajectory; CSV logs go through read_log")
-        data = _json_object(read_text(file), file)
-        arrays = _json_columns(data, file, _POINTS, _POINTS_OPTIONAL)
-        engine, name = data.get("engine", ""), data.get("name", "")
+    if not _has_header(file):
+        raise InputError(f"{file}: expected a JSON or Parquet trajectory; CSV logs go through read_log")
+    arrays, header = _columns_and_header(file, _POINTS, _POINTS_OPTIONAL)
     return OperatingLog(
         velocity=arrays["velocity"],
         effort=arrays["effort"],
         time=arrays.get("time"),
-        engine=str(engine),
-        name=str(name or file.stem),
+        engine=str(header.get("engine", "")),
+        name=str(header.get("name", "") or file.stem),
     )
 
 
@@ -381,12 +414,3 @@ def _json_columns(
         lengths = ", ".join(f"{c} {values.shape[0]}" for c, values in arrays.items())
         raise InputError(f"{file}: the columns have different lengths ({lengths}); expected one per row")
     return arrays
-
-
-def _from_json(text: str, file: Path) -> Trajectory:
-    data = _json_object(text, file)
-    arrays = _json_columns(data, file, COLUMNS, ())
-    joint = data.get("joint", "revolute")
-    if joint not in ("revolute", "prismatic"):
-        raise InputError(f"{file}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
-    return _with_header(arrays, {**data, "joint": joint}, file)

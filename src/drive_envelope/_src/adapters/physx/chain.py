@@ -27,7 +27,7 @@ from drive_envelope._src.adapters.physx.chain_scene import (
     link_path,
     zero_pose,
 )
-from drive_envelope._src.adapters.physx.runner import _attached, _physx, _read_joints, _write
+from drive_envelope._src.adapters.physx.runner import _STATE, _attached, _physx, _read_joints, _row, _write
 from drive_envelope._src.adapters.physx.stand import check_time_step
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_frames import rotate
@@ -38,7 +38,6 @@ EFFORT_SOURCE = (
     "the links' weight and motion (ovphysx 0.7 has no read of the drive's own force)"
 )
 """What the ``effort`` columns of a physx chain run hold."""
-_STATE = ("jointPosition", "jointVelocity", "jointProjectedForce")
 
 
 def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
@@ -57,10 +56,6 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
     return chain_run(
         scenario, "physx", position, velocity, effort, precision="float32", effort_source=EFFORT_SOURCE
     )
-
-
-def _row(value: float) -> np.ndarray:
-    return np.array([value], dtype=np.float32)
 
 
 def _step(physx: Any, scenario: ChainScenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -31,7 +31,7 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
-from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.scenario.trajectory import Trajectory, stand_run
 
 EFFORT_SOURCE = (
     "PhysX jointProjectedForce: the joint force projected on the DOF, which is the drive + applied "
@@ -157,22 +157,15 @@ def _joint_effort(scenario: Scenario, result: PhysxResult) -> np.ndarray:
 
 
 def _trajectory(scenario: Scenario, result: PhysxResult) -> Trajectory:
-    sim = scenario.simulation
-    time = np.arange(sim.steps + 1, dtype=np.float64) * sim.dt
-    return Trajectory(
-        time=time,
-        position=result.position,
-        velocity=result.velocity,
-        effort=_joint_effort(scenario, result),
-        joint=scenario.joint.type,
-        engine="physx",
-        name=scenario.name,
-        metadata={
-            **sim.metadata(),
-            "precision": "float32",
-            "effort_source": EFFORT_SOURCE_FRICTION if scenario.friction.active else EFFORT_SOURCE,
-            "engine_version": _ovphysx_version(),
-        },
+    source = EFFORT_SOURCE_FRICTION if scenario.friction.active else EFFORT_SOURCE
+    columns = (result.position, result.velocity, _joint_effort(scenario, result))
+    return stand_run(
+        scenario,
+        "physx",
+        *columns,
+        precision="float32",
+        effort_source=source,
+        engine_version=_ovphysx_version(),
     )
 
 

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 from drive_envelope._src.adapters.usd.joint_map import (
     JointMap,
+    _names,
     match_joints,
     resolve_envelopes,
 )
@@ -173,7 +174,7 @@ def rating_report(applied: Sequence[AppliedDrive]) -> list[str]:
             lines.append(
                 f"{where}: max_effort {env.max_effort:g} {effort_unit} is "
                 f"{100 * (1 - env.max_effort / rated):.0f} % below the asset's maxForce {rated:g} "
-                f"{effort_unit} on {_names([i.joint_path for i in low])}: the envelope replaces it"
+                f"{effort_unit} on {_names([i.joint_path for i in low], str)}: the envelope replaces it"
             )
         fast = [
             i
@@ -184,15 +185,10 @@ def rating_report(applied: Sequence[AppliedDrive]) -> list[str]:
             limit = min(i.rated_speed for i in fast)
             lines.append(
                 f"{where}: max_actuator_velocity {env.max_actuator_velocity:g} {speed_unit} is above the "
-                f"joint's maxJointVelocity {limit:g} {speed_unit} on {_names([i.joint_path for i in fast])}: "
-                "PhysX's joint limit binds first"
+                f"joint's maxJointVelocity {limit:g} {speed_unit} on "
+                f"{_names([i.joint_path for i in fast], str)}: PhysX's joint limit binds first"
             )
     return lines
-
-
-def _names(paths: Sequence[str]) -> str:
-    shown = ", ".join(paths[:3])
-    return shown + (f" and {len(paths) - 3} more" if len(paths) > 3 else "")
 
 
 def _check_shared(first: Assignment, item: Assignment, site: str) -> None:

@@ -45,7 +45,7 @@ import difflib
 import fnmatch
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -251,8 +251,9 @@ def _subject(pattern: str, joint: str) -> str:
     return joint if "/" in pattern else joint.rpartition("/")[2]
 
 
-def _names(joints: Sequence[str]) -> str:
-    shown = ", ".join(repr(joint) for joint in joints[:_SHOWN])
+def _names(joints: Sequence[str], show: Callable[[str], str] = repr) -> str:
+    """The first few ``joints`` (each written by ``show``) and how many more there are."""
+    shown = ", ".join(show(joint) for joint in joints[:_SHOWN])
     return shown + (f" and {len(joints) - _SHOWN} more" if len(joints) > _SHOWN else "")
 
 

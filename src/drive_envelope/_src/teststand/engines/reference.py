@@ -26,7 +26,7 @@ import numpy as np
 
 from drive_envelope._src.scenario.schedule import DriveSchedule
 from drive_envelope._src.scenario.spec import Scenario
-from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.scenario.trajectory import Trajectory, stand_run
 from drive_envelope._src.teststand.batch import (
     OVERFLOW_LAW,
     OVERFLOW_REQUEST,
@@ -180,21 +180,5 @@ def simulate(
     if result.diverged[0]:
         what = _OVERFLOWS[int(result.overflow[0])]
         raise overflow_error(scenario.name, what, int(result.diverged_step[0]) * sim.dt, _CHECK)
-    return Trajectory(
-        time=np.arange(count + 1, dtype=np.float64) * sim.dt,
-        position=result.position[:, 0],
-        velocity=result.velocity[:, 0],
-        effort=result.effort[:, 0],
-        joint=scenario.joint.type,
-        engine="reference",
-        name=scenario.name,
-        metadata=_metadata(scenario),
-    )
-
-
-def _metadata(scenario: Scenario) -> dict[str, object]:
-    sim = scenario.simulation
-    return {
-        **sim.metadata(),
-        "precision": "float64",
-    }
+    columns = (result.position[:, 0], result.velocity[:, 0], result.effort[:, 0])
+    return stand_run(scenario, "reference", *columns, precision="float64")
