@@ -44,24 +44,6 @@ if TYPE_CHECKING:
     import torch
 
 
-def _device(values: tuple[object, ...]) -> torch.device:
-    import torch
-
-    for value in values:
-        if isinstance(value, torch.Tensor):
-            return value.device
-    return torch.device("cpu")
-
-
-def _tensors(values: tuple[object, ...], dtype: Any) -> list[torch.Tensor]:
-    """All ``values`` as tensors of one float dtype on one device (no copy when they already are)."""
-    import torch
-
-    kind = resolve_dtype(dtype, *values)
-    device = _device(values)
-    return [torch.as_tensor(v, dtype=kind, device=device) for v in values]
-
-
 @functools.cache
 def _zero(dtype: torch.dtype, device: torch.device) -> torch.Tensor:
     """A 0-d zero of ``dtype`` on ``device``, made once (a clamp bound without a per-call allocation)."""
@@ -212,9 +194,15 @@ def _clamp_drive_impulse_tensors(
 
 
 def _impulse_tensors(values: tuple[object, ...], dtype: Any, where: str) -> list[torch.Tensor]:
+    """The arguments as tensors of one float dtype on the first tensor's device (the CPU if none), broadcast.
+
+    A tensor already of that dtype and device is used as it is (no copy).
+    """
     import torch
 
-    tensors = _tensors(values, dtype)
+    kind = resolve_dtype(dtype, *values)
+    device = next((v.device for v in values if isinstance(v, torch.Tensor)), torch.device("cpu"))
+    tensors = [torch.as_tensor(v, dtype=kind, device=device) for v in values]
     # a user mistake, named as NumPy and Warp name it (torch's own error is a RuntimeError)
     broadcast_shape(where, CLAMP_DRIVE_IMPULSE_ARGS, [tuple(t.shape) for t in tensors])
     return list(torch.broadcast_tensors(*tensors))
