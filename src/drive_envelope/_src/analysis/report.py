@@ -20,6 +20,7 @@ import numpy.typing as npt
 from drive_envelope._src.analysis.mapping import UnusedKey
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.io.envelope_file import envelope_data
 
 CurveName = Literal["effort", "velocity"]
 FloatArray = npt.NDArray[np.float64]
@@ -211,13 +212,10 @@ def json_float(value: float | None) -> float | str | None:
 
 
 def _joint_dict(check: JointCheck, tolerance: float) -> dict[str, Any]:
-    env = check.envelope.to_dict()
     return {
         "joint": check.joint,
         "passed": check.fraction_outside <= tolerance,
-        "envelope": {
-            key: json_float(value) if isinstance(value, float) else value for key, value in env.items()
-        },
+        "envelope": envelope_data(check.envelope),
         "samples": check.samples,
         "samples_outside": check.samples_outside,
         "samples_released": check.samples_released,

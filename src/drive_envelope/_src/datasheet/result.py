@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 from drive_envelope._src.datasheet.spec import Datasheet, ParamSource
@@ -79,14 +79,8 @@ class Derivation:
 
     def to_dict(self) -> dict[str, object]:
         """The ``derive --json`` object: SI, joint side, the spec's keys plus a few extra ones."""
-        env = self.envelope
         data: dict[str, object] = {
-            "name": env.name,
-            "joint": env.joint,
-            "max_effort": env.max_effort,
-            "max_actuator_velocity": env.max_actuator_velocity,
-            "velocity_dependent_resistance": env.velocity_dependent_resistance,
-            "speed_effort_gradient": env.speed_effort_gradient,
+            **self.envelope.to_dict(),
             "max_effort_limited_by": self.max_effort_limited_by,
             "max_effort_limits": {c.name: c.value for c in self.max_effort_limits},
             "max_actuator_velocity_limited_by": self.max_actuator_velocity_limited_by,
@@ -100,11 +94,5 @@ class Derivation:
             "provenance": dict(self.provenance),
         }
         if self.line_fit is not None:
-            fit = self.line_fit
-            data["line_fit"] = {
-                "max_actuator_velocity": fit.max_actuator_velocity,
-                "speed_effort_gradient": fit.speed_effort_gradient,
-                "max_error": fit.max_error,
-                "rms_error": fit.rms_error,
-            }
+            data["line_fit"] = asdict(self.line_fit)
         return data

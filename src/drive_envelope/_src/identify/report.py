@@ -32,6 +32,7 @@ from typing import Any
 from drive_envelope._src.format import format_table
 from drive_envelope._src.identify.parameters import parameter_units
 from drive_envelope._src.identify.run import Identification, LogError, mean_error
+from drive_envelope._src.io.envelope_file import envelope_data
 
 
 def _number(value: float | None) -> float | str | None:
@@ -88,10 +89,7 @@ def identification_to_dict(result: Identification) -> dict[str, Any]:
             "restarts": len(result.search.restart_costs),
             "restart_costs": list(result.search.restart_costs),
         },
-        "envelope": {
-            key: _number(value) if isinstance(value, float) else value
-            for key, value in result.envelope.to_dict().items()
-        },
+        "envelope": envelope_data(result.envelope),
         "units": units,
         "notes": list(result.notes),
     }

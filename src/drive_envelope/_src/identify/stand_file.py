@@ -30,58 +30,36 @@ def stand_to_mapping(stand: IdentifyStand) -> dict[str, dict[str, object] | str]
     scenario = stand.scenario
     envelope = scenario.effective_envelope()
     data: dict[str, dict[str, object] | str] = {"name": scenario.name}
-    data["joint"] = {
-        "type": scenario.joint.type,
-        "inertia": scenario.joint.inertia,
-        "armature": scenario.joint.armature,
-    }
+    data["joint"] = _fields(scenario.joint, "type", "inertia", "armature")
     drive: dict[str, object] = {"type": scenario.drive.type}
     if stand.duty_per_rad is None:
         drive["stiffness"] = scenario.drive.stiffness
-    drive.update(
-        damping=scenario.drive.damping,
-        max_effort=scenario.drive.max_effort,
-        target_velocity=scenario.drive.target_velocity,
-    )
+    drive.update(_fields(scenario.drive, "damping", "max_effort", "target_velocity"))
     data["drive"] = drive
     if envelope is not None and scenario.envelope is not None:
-        data["envelope"] = {
-            "max_actuator_velocity": envelope.max_actuator_velocity,
-            "velocity_dependent_resistance": envelope.velocity_dependent_resistance,
-            "speed_effort_gradient": envelope.speed_effort_gradient,
-        }
+        lines = ("max_actuator_velocity", "velocity_dependent_resistance", "speed_effort_gradient")
+        data["envelope"] = _fields(envelope, *lines)
     if stand.duty_per_rad is not None:
         servo: dict[str, object] = {"duty_per_rad": stand.duty_per_rad}
         if stand.duty_effort is not None:
             servo["duty_effort"] = stand.duty_effort
         data["servo"] = servo
     if scenario.load.external_effort or scenario.load.applied_effort:
-        data["load"] = {
-            "external_effort": scenario.load.external_effort,
-            "applied_effort": scenario.load.applied_effort,
-        }
+        data["load"] = _fields(scenario.load, "external_effort", "applied_effort")
     if scenario.pendulum is not None:
-        data["pendulum"] = {
-            "mass": scenario.pendulum.mass,
-            "distance": scenario.pendulum.distance,
-            "angle_offset": scenario.pendulum.angle_offset,
-        }
-    friction = scenario.friction
-    data["friction"] = {
-        "static_friction": friction.static_friction,
-        "dynamic_friction": friction.dynamic_friction,
-        "viscous_friction": friction.viscous_friction,
-    }
-    simulation = scenario.simulation
-    data["simulation"] = {
-        "solver": simulation.solver,
-        "position_iterations": simulation.position_iterations,
-        "velocity_iterations": simulation.velocity_iterations,
-        "gravity": simulation.gravity,
-    }
+        data["pendulum"] = _fields(scenario.pendulum, "mass", "distance", "angle_offset")
+    data["friction"] = _fields(scenario.friction, "static_friction", "dynamic_friction", "viscous_friction")
+    data["simulation"] = _fields(
+        scenario.simulation, "solver", "position_iterations", "velocity_iterations", "gravity"
+    )
     if stand.bounds:
         data["bounds"] = {name: [low, high] for name, (low, high) in stand.bounds.items()}
     return data
+
+
+def _fields(record: object, *names: str) -> dict[str, object]:
+    """The named attributes of ``record``, in that order: one table of the file."""
+    return {name: getattr(record, name) for name in names}
 
 
 def stand_to_toml(stand: IdentifyStand, comments: Sequence[str] = ()) -> str:
