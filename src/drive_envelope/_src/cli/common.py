@@ -189,13 +189,13 @@ def checked_output(output: str | None, flag: str = "--output") -> str | None:
     return output
 
 
-def check_toml_or_json(path: str, flag: str, what: str) -> None:
+def check_toml_or_json(path: str | None, flag: str, what: str) -> None:
     """Refuse a ``flag`` file name that ends neither in .toml nor in .json (``what``: "a stand file").
 
     Raises:
-        InputError: naming the flag, the file and what was expected.
+        InputError: naming the flag, the file and what was expected (None, no file, passes).
     """
-    if Path(path).suffix.lower() not in (".toml", ".json"):
+    if path is not None and Path(path).suffix.lower() not in (".toml", ".json"):
         raise InputError(f"{flag} {path!r}: expected {what} name ending in .toml or .json")
 
 

@@ -129,8 +129,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.io.envelope_file import save_envelope
 
     output = checked_output(args.output)
-    if output is not None:
-        check_toml_or_json(output, "--output", "an envelope file")
+    check_toml_or_json(output, "--output", "an envelope file")
     source = args.from_curve or args.log  # simulate's JSON trajectory is a log with a .json name
     refuse_input_as_output(output, source, "the curve" if args.from_curve else "the log", "the envelope")
     options = FitOptions(

@@ -154,10 +154,8 @@ def _run(args: argparse.Namespace) -> int:
     output = checked_output(args.output)
     envelope_output = checked_output(args.envelope_output, "--envelope-output")
     plot = checked_output(args.plot, "--plot")
-    if output is not None:
-        check_toml_or_json(output, "--output", "a stand file")
-    if envelope_output is not None:
-        check_toml_or_json(envelope_output, "--envelope-output", "an envelope file")
+    check_toml_or_json(output, "--output", "a stand file")
+    check_toml_or_json(envelope_output, "--envelope-output", "an envelope file")
     if plot is not None:
         from drive_envelope._src.plots.figure import check_figure_path
 
