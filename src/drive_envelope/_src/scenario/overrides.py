@@ -11,7 +11,6 @@ from drive_envelope._src.validation import nearest_key
 
 SECTIONS = ("joint", "drive", "envelope", "load", "pendulum", "friction", "simulation")
 """The tables of a scenario file."""
-_SECTIONS = SECTIONS
 
 
 def parse_override(text: str) -> tuple[str, str, object]:
@@ -48,10 +47,10 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str]) -> dict[s
     result = copy.deepcopy(dict(data))
     for text in overrides:
         section, key, value = parse_override(text)
-        if section not in _SECTIONS:
+        if section not in SECTIONS:
             raise InputError(
-                f"--set {text!r}: unknown section {section!r}{nearest_key(section, _SECTIONS)}; "
-                f"valid sections: {', '.join(_SECTIONS)}"
+                f"--set {text!r}: unknown section {section!r}{nearest_key(section, SECTIONS)}; "
+                f"valid sections: {', '.join(SECTIONS)}"
             )
         table = result.setdefault(section, {})
         if not isinstance(table, dict):

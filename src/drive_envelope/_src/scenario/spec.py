@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -421,14 +421,8 @@ def _read_envelope(
     else:  # an unlimited maxForce leaves only the speed line (eq. 2), as in PhysX
         envelope = PerformanceEnvelope(max_effort=drive.max_effort, joint=joint, **values)  # type: ignore[arg-type]
     if envelope.max_effort != drive.max_effort:
-        drive = _replace_max_effort(drive, envelope.max_effort)
+        drive = replace(drive, max_effort=envelope.max_effort)
     return envelope, drive
-
-
-def _replace_max_effort(drive: DriveSpec, max_effort: float) -> DriveSpec:
-    import dataclasses
-
-    return dataclasses.replace(drive, max_effort=max_effort)
 
 
 def _resolve_datasheet(

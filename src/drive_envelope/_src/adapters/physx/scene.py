@@ -64,7 +64,11 @@ def build_teststand_stage(
     """
     units = units or StageUnits()
     stage = new_stage(units)
-    _define_scene(stage, scenario, units)
+    if scenario.pendulum is None:  # no gravity; a pendulum's is perpendicular to the joint's Z axis
+        define_physics_scene(stage, scenario.simulation, (0.0, 0.0, -1.0), 0.0)
+    else:
+        gravity = float(scenario.simulation.gravity * units.length())
+        define_physics_scene(stage, scenario.simulation, (0.0, -1.0, 0.0), gravity)
     define_articulation_root(stage, ARTICULATION_PATH, scenario.simulation)
     revolute = scenario.joint.type == "revolute"
     mass_si = 1.0 if revolute else scenario.joint.inertia
@@ -100,14 +104,6 @@ def new_stage(units: StageUnits) -> Usd.Stage:
 
 def _set(prim: Usd.Prim, name: str, type_name: object, value: object) -> None:
     prim.CreateAttribute(name, type_name, False).Set(value)
-
-
-def _define_scene(stage: Usd.Stage, scenario: Scenario, units: StageUnits) -> None:
-    if scenario.pendulum is None:
-        define_physics_scene(stage, scenario.simulation, (0.0, 0.0, -1.0), 0.0)
-    else:  # perpendicular to the revolute joint's Z axis
-        gravity = float(scenario.simulation.gravity * units.length())
-        define_physics_scene(stage, scenario.simulation, (0.0, -1.0, 0.0), gravity)
 
 
 def define_physics_scene(
