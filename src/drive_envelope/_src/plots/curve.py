@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
 
@@ -269,41 +269,35 @@ def _fmt(value: float) -> str:
 
 def _lines(env: PerformanceEnvelope, v_ext: float, e_ext: float) -> tuple[BoundaryLine, ...]:
     sym_e = "τ" if env.joint == "revolute" else "F"
-    units = {f: si_unit(f, env.joint) for f in ("max_effort", "max_actuator_velocity")}
+    units = {f: si_unit(f, env.joint) for f in ENVELOPE_FIELDS}
     resistance, gradient = env.velocity_dependent_resistance, env.speed_effort_gradient
     v_end = v_ext if resistance == 0.0 else min(v_ext, env.max_effort / resistance)
     eq1 = np.array([[0.0, env.max_effort], [v_end, env.max_effort - resistance * v_end]])
-    r_unit = si_unit("velocity_dependent_resistance", env.joint)
-    lines = [
-        BoundaryLine(
-            name="eq1",
-            equation=f"|{sym_e}| = {sym_e}_max − k_{sym_e}v·|v|",
-            label=(
-                f"eq. 1: |{sym_e}| = {_fmt(env.max_effort)} − {_fmt(resistance)}·|v|   "
-                f"({sym_e}_max = {_fmt(env.max_effort)} {units['max_effort']}, "
-                f"k_{sym_e}v = {_fmt(resistance)} {r_unit})"
-            ),
-            segments=_mirror(_clip(eq1, v_ext, e_ext)),
+    lines = [  # (name, equation, label, first-quadrant segment)
+        (
+            "eq1",
+            f"|{sym_e}| = {sym_e}_max − k_{sym_e}v·|v|",
+            f"eq. 1: |{sym_e}| = {_fmt(env.max_effort)} − {_fmt(resistance)}·|v|   "
+            f"({sym_e}_max = {_fmt(env.max_effort)} {units['max_effort']}, "
+            f"k_{sym_e}v = {_fmt(resistance)} {units['velocity_dependent_resistance']})",
+            eq1,
         )
     ]
     if math.isfinite(env.max_actuator_velocity):
         vmax = env.max_actuator_velocity
         e_end = e_ext if gradient == 0.0 else min(e_ext, vmax / gradient)
-        eq2 = np.array([[vmax, 0.0], [vmax - gradient * e_end, e_end]])
-        g_unit = si_unit("speed_effort_gradient", env.joint)
-        lines.append(
-            BoundaryLine(
-                name="eq2",
-                equation=f"|v| = v_max − k_v{sym_e}·|{sym_e}|",
-                label=(
-                    f"eq. 2: |v| = {_fmt(vmax)} − {_fmt(gradient)}·|{sym_e}|   "
-                    f"(v_max = {_fmt(vmax)} {units['max_actuator_velocity']}, "
-                    f"k_v{sym_e} = {_fmt(gradient)} {g_unit})"
-                ),
-                segments=_mirror(_clip(eq2, v_ext, e_ext)),
-            )
-        )
-    return tuple(lines)
+        lines.append((
+            "eq2",
+            f"|v| = v_max − k_v{sym_e}·|{sym_e}|",
+            f"eq. 2: |v| = {_fmt(vmax)} − {_fmt(gradient)}·|{sym_e}|   "
+            f"(v_max = {_fmt(vmax)} {units['max_actuator_velocity']}, "
+            f"k_v{sym_e} = {_fmt(gradient)} {units['speed_effort_gradient']})",
+            np.array([[vmax, 0.0], [vmax - gradient * e_end, e_end]]),
+        ))  # fmt: skip
+    return tuple(
+        BoundaryLine(name=name, equation=equation, label=label, segments=_mirror(_clip(ends, v_ext, e_ext)))
+        for name, equation, label, ends in lines
+    )
 
 
 def _corner_points(env: PerformanceEnvelope) -> tuple[CornerPoint, ...]:
