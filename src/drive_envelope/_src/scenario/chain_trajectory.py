@@ -132,19 +132,14 @@ class ChainTrajectory:
         }
 
 
-def chain_run(
-    scenario: ChainScenario,
-    engine: str,
-    position: FloatArray,
-    velocity: FloatArray,
-    effort: FloatArray,
-    **metadata: Any,
-) -> ChainTrajectory:
-    """An engine's run of ``scenario``: rows ``(steps + 1, dofs)`` from t = 0 every ``dt`` [s].
+def chain_run(scenario: ChainScenario, engine: str, *columns: FloatArray, **metadata: Any) -> ChainTrajectory:
+    """An engine's run of ``scenario``: its position, velocity and effort ``columns`` from t = 0.
 
-    The metadata holds the scenario's solver settings and then ``metadata`` (precision, effort source).
+    Rows ``(steps + 1, dofs)``, one every ``dt`` [s]; the metadata holds the scenario's solver
+    settings, then ``metadata``.
     """
     sim = scenario.simulation
+    position, velocity, effort = columns
     return ChainTrajectory(
         time=np.arange(position.shape[0], dtype=np.float64) * sim.dt,
         position=position,

@@ -118,19 +118,13 @@ class Trajectory:
         }
 
 
-def stand_run(
-    scenario: Scenario,
-    engine: str,
-    position: FloatArray,
-    velocity: FloatArray,
-    effort: FloatArray,
-    **metadata: Any,
-) -> Trajectory:
-    """An engine's run of ``scenario``: rows from t = 0 every ``dt`` [s], its joint type and name.
+def stand_run(scenario: Scenario, engine: str, *columns: FloatArray, **metadata: Any) -> Trajectory:
+    """An engine's run of ``scenario``: its position, velocity and effort ``columns`` from t = 0.
 
-    The metadata holds the scenario's solver settings and then ``metadata`` (precision, effort source).
+    One row every ``dt`` [s]; the metadata holds the scenario's solver settings, then ``metadata``.
     """
     sim = scenario.simulation
+    position, velocity, effort = columns
     return Trajectory(
         time=np.arange(position.shape[0], dtype=np.float64) * sim.dt,
         position=position,
