@@ -164,6 +164,13 @@ def add_force_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def print_json(data: object, *, ensure_ascii: bool = True) -> None:
+    """Print a command's result on stdout as one indented JSON object (``--format json``)."""
+    import json
+
+    print(json.dumps(data, indent=2, ensure_ascii=ensure_ascii))
+
+
 def status(message: str) -> None:
     """Print a status line (what was written) on stderr."""
     print(message, file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from drive_envelope._src.cli.common import add_format_argument
+from drive_envelope._src.cli.common import add_format_argument, print_json
 
 
 def register(subparsers: Any) -> None:
@@ -62,8 +62,6 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _show(name: str, *, sources: bool, as_json: bool) -> int:
-    import json
-
     from drive_envelope._src.datasheet.catalog import (
         catalog_entry,
         catalog_sources,
@@ -87,7 +85,7 @@ def _show(name: str, *, sources: bool, as_json: bool) -> int:
             "sources": list(sheet.sources),
             "values": [{"key": v.key, "value": v.value, "source": v.source} for v in values],
         }
-        print(json.dumps(data, indent=2, ensure_ascii=False))
+        print_json(data, ensure_ascii=False)
         return 0
     print(f"{sheet.name} ({key}, {sheet.joint})")
     print(format_table(["key", "value", "source"], [[v.key, v.value, v.source] for v in values]))
@@ -98,8 +96,6 @@ def _show(name: str, *, sources: bool, as_json: bool) -> int:
 
 
 def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
-    import json
-
     from drive_envelope._src.datasheet.catalog import catalog_entries, load_catalog_datasheet, no_match_error
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.format import format_table, format_value
@@ -135,11 +131,7 @@ def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
         )
     if as_json:
         filters = {"joint": joint, "search": search}
-        print(
-            json.dumps(
-                {"count": len(items), "filters": filters, "actuators": items}, indent=2, ensure_ascii=False
-            )
-        )
+        print_json({"count": len(items), "filters": filters, "actuators": items}, ensure_ascii=False)
         return 0
     print(format_table(["key", "joint", "max_effort", "max_velocity", "name"], rows))
     print(
@@ -150,15 +142,13 @@ def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
 
 
 def _maps(*, as_json: bool) -> int:
-    import json
-
     from drive_envelope._src.datasheet.maps import robot_maps
     from drive_envelope._src.format import format_table
 
     maps = robot_maps()
     if as_json:
         listed = [{"key": m.key, "robot": m.title, "path": str(m.path)} for m in maps]
-        print(json.dumps({"count": len(listed), "maps": listed}, indent=2))
+        print_json({"count": len(listed), "maps": listed})
         return 0
     print(format_table(["map", "robot", "file"], [[m.key, m.title, str(m.path)] for m in maps]))
     print(

@@ -81,13 +81,11 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.analysis.api import check_log
     from drive_envelope._src.analysis.check import CheckOptions
     from drive_envelope._src.analysis.options import columns_from_args
     from drive_envelope._src.analysis.text import check_warnings, format_check
-    from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.cli.common import checked_output, print_json, status, warn
     from drive_envelope._src.plots.check import plot_check
     from drive_envelope._src.plots.figure import check_figure_path
 
@@ -125,7 +123,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.plot:
         written = plot_check(report, args.plot, force=args.force)
     if args.format == "json":
-        print(json.dumps(report.to_dict(), indent=2))
+        print_json(report.to_dict())
     else:
         print(format_check(report))
     if args.plot:

@@ -61,9 +61,13 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import json
-
-    from drive_envelope._src.cli.common import checked_output, refuse_input_as_output, status, warn
+    from drive_envelope._src.cli.common import (
+        checked_output,
+        print_json,
+        refuse_input_as_output,
+        status,
+        warn,
+    )
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import load_datasheet
@@ -86,7 +90,7 @@ def _run(args: argparse.Namespace) -> int:
     if output is not None and file_format is not None:
         atomic_write_text(output, envelope_text(derivation.envelope, file_format), force=args.force)
     if args.format == "json":
-        print(json.dumps(derivation.to_dict(), indent=2))
+        print_json(derivation.to_dict())
     elif args.format == "text":
         print(derivation_report(derivation))
     else:

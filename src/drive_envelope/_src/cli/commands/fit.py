@@ -113,8 +113,6 @@ def _fixed(items: list[str], joint: str) -> dict[str, float]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.analysis.api import fit_curve, fit_log
     from drive_envelope._src.analysis.fit import FitOptions
     from drive_envelope._src.analysis.options import columns_from_args
@@ -122,6 +120,7 @@ def _run(args: argparse.Namespace) -> int:
     from drive_envelope._src.cli.common import (
         check_toml_or_json,
         checked_output,
+        print_json,
         refuse_input_as_output,
         status,
     )
@@ -159,7 +158,7 @@ def _run(args: argparse.Namespace) -> int:
     if output is not None:
         save_envelope(result.envelope, output, force=args.force)
     if args.format == "json":
-        print(json.dumps(result.to_dict(), indent=2))
+        print_json(result.to_dict())
     else:
         print(format_fit(result))
     if output is not None:

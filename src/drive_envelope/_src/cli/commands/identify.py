@@ -134,13 +134,12 @@ def _fit_names(text: str | None) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.analysis.options import bag_from_args
     from drive_envelope._src.cli.common import (
         Progress,
         check_toml_or_json,
         checked_output,
+        print_json,
         printed_warnings,
         status,
         warn,
@@ -203,7 +202,7 @@ def _run(args: argparse.Namespace) -> int:
 
         save_identification_figure(result, plot, force=args.force)
     if args.format == "json":
-        print(json.dumps(identification_to_dict(result), indent=2))
+        print_json(identification_to_dict(result))
     else:
         print(identification_text(result))
     for path in (output, envelope_output, plot):

@@ -167,8 +167,7 @@ def _apply(args: argparse.Namespace) -> int:
 
 def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) -> None:
     """The report of ``mujoco apply`` as one JSON object on stdout (inf written as ``"inf"``)."""
-    import json
-
+    from drive_envelope._src.cli.common import print_json
     from drive_envelope._src.io.envelope_file import envelope_data
 
     drives = [
@@ -185,7 +184,7 @@ def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) 
         for item in done
     ]
     report = {"output": args.output, "model": args.model, "drives": drives, "reloaded_drives": reloaded}
-    print(json.dumps(report, indent=2, ensure_ascii=False))
+    print_json(report, ensure_ascii=False)
 
 
 def _is_frcrange_warning(message: str) -> bool:
@@ -224,13 +223,11 @@ def _summary(envelope: Any, stiffness: float, damping: float) -> str:
 
 
 def _show(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.adapters.mujoco.bypass import other_actuators
     from drive_envelope._src.adapters.mujoco.mjcf import read_model, uses_plugin
     from drive_envelope._src.adapters.mujoco.params import model_drives
     from drive_envelope._src.analysis.report import json_float
-    from drive_envelope._src.cli.common import printed_warnings
+    from drive_envelope._src.cli.common import print_json, printed_warnings
     from drive_envelope._src.format import format_table, format_value
     from drive_envelope._src.io.envelope_file import envelope_data
 
@@ -265,7 +262,7 @@ def _show(args: argparse.Namespace) -> int:
                 for o in others
             ],
         }
-        print(json.dumps(data, indent=2))
+        print_json(data)
         return 0
     print(f"{args.model}: {len(drives)} drive_envelope.envelope drive(s); values in SI")
     if drives:

@@ -63,7 +63,7 @@ def register(subparsers: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     import warnings
 
-    from drive_envelope._src.cli.common import checked_output, status, warn
+    from drive_envelope._src.cli.common import checked_output, print_json, status, warn
     from drive_envelope._src.plots.figure import check_figure_path, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
 
@@ -88,8 +88,6 @@ def _run(args: argparse.Namespace) -> int:
     for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
         warn(message)  # matplotlib's (a glyph the font lacks, drawn as a box): one line each, no source
     if args.format == "json":  # the report is the command's result: stdout
-        import json
-
         from drive_envelope._src.io.envelope_file import envelope_data
 
         report = {
@@ -102,7 +100,7 @@ def _run(args: argparse.Namespace) -> int:
             "dpi": args.dpi,
             "warnings": list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught)),
         }
-        print(json.dumps(report, indent=2, ensure_ascii=False))
+        print_json(report, ensure_ascii=False)
         return 0
     status(f"wrote {output}")
     return 0

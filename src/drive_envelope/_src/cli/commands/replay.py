@@ -40,10 +40,8 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.analysis.options import bag_from_args
-    from drive_envelope._src.cli.common import printed_warnings
+    from drive_envelope._src.cli.common import print_json, printed_warnings
     from drive_envelope._src.identify.playback import playback_text, playback_to_dict, replay_logs
     from drive_envelope._src.identify.stand import StandWarning
 
@@ -52,7 +50,7 @@ def _run(args: argparse.Namespace) -> int:
             args.logs, args.stand, engine=args.engine, bag=bag_from_args(args), joint=args.joint
         )
     if args.format == "json":
-        print(json.dumps(playback_to_dict(result), indent=2))
+        print_json(playback_to_dict(result))
     else:
         print(playback_text(result))
     return 0

@@ -65,7 +65,7 @@ def register(subparsers: Any) -> None:
 
 
 def _apply(args: argparse.Namespace) -> int:
-    from drive_envelope._src.cli.common import envelope_summary, printed_warnings, status
+    from drive_envelope._src.cli.common import envelope_summary, print_json, printed_warnings, status
 
     _check_apply_arguments(args)
     with printed_warnings(also_on_error=True):
@@ -76,8 +76,6 @@ def _apply(args: argparse.Namespace) -> int:
     kind = "in place" if args.in_place else "self-contained" if args.flatten else f"a layer over {args.asset}"
     enveloped = sum(1 for record in drives if record.envelope is not None)
     if args.format == "json":
-        import json
-
         from drive_envelope._src.io.envelope_file import envelope_data
 
         report = {
@@ -96,7 +94,7 @@ def _apply(args: argparse.Namespace) -> int:
             "joint_drives": len(drives),
             "with_envelope": enveloped,
         }
-        print(json.dumps(report, indent=2, ensure_ascii=False))
+        print_json(report, ensure_ascii=False)
     status(
         f"wrote {len(applied)} drive(s) to {written} ({kind}; reopened: {enveloped} of "
         f"{len(drives)} joint drives have an envelope)"
@@ -165,12 +163,10 @@ def _check_apply_arguments(args: argparse.Namespace) -> None:
 
 
 def _show(args: argparse.Namespace) -> int:
-    import json
-
     from drive_envelope._src.adapters.usd.authoring import list_drives
     from drive_envelope._src.adapters.usd.stage import open_stage, stage_units
     from drive_envelope._src.analysis.report import json_float
-    from drive_envelope._src.cli.common import printed_warnings
+    from drive_envelope._src.cli.common import print_json, printed_warnings
     from drive_envelope._src.format import format_table, format_value
     from drive_envelope._src.io.envelope_file import envelope_data
 
@@ -197,7 +193,7 @@ def _show(args: argparse.Namespace) -> int:
                 for r in records
             ],
         }
-        print(json.dumps(data, indent=2))
+        print_json(data)
         return 0
     print(
         f"{args.asset}: metersPerUnit {units.meters_per_unit:g}, "
