@@ -128,6 +128,29 @@ def test_clamp_drive_impulse_matches_float32_reference(backend: Backend, vectors
         assert _same(result, de.clamp_drive_impulse(*args, dtype=np.float32, physx_exact=exact))
 
 
+def test_clamp_drive_impulse_near_the_float_range_matches_the_reference(backend: Backend) -> None:
+    """Finite ``dev -+ limit`` that overflow take the split quotients, as in the NumPy core.
+
+    Velocities and limits of 1e38-3.3e38 in float32: some of these elements give another result
+    when every bound is formed as PhysX forms it (what the Warp kernel's fast path does).
+    """
+    rng = np.random.default_rng(1)
+    n, f = 4000, np.float32
+    args = [
+        (rng.uniform(1e38, 3.3e38, n) * rng.choice([-1, 1], n)).astype(f),
+        np.zeros(n, f),
+        rng.uniform(-3e38, 3e38, n).astype(f),
+        rng.uniform(1.0, 3.0, n).astype(f),
+        rng.uniform(1e38, 3.3e38, n).astype(f),
+        rng.uniform(1e37, 3e38, n).astype(f),
+        rng.uniform(0.0, 2.0, n).astype(f),
+        rng.uniform(0.0, 1.0, n).astype(f),
+    ]
+    expected = de.clamp_drive_impulse(*args, dtype=np.float32)
+    assert np.count_nonzero(expected) > n // 3  # the clamp binds, not only lets go
+    assert _same(backend.host(backend.module.clamp_drive_impulse(*backend.upload(args))), expected)
+
+
 def test_clamp_drive_impulse_matches_physx_golden(backend: Backend) -> None:
     """Reproduce real PhysX's float32 results (tests/golden) bit for bit."""
     golden = physx_golden()
