@@ -27,7 +27,7 @@ from drive_envelope._src.adapters.physx.chain_scene import (
     link_path,
     zero_pose,
 )
-from drive_envelope._src.adapters.physx.runner import _STATE, _attached, _physx, _read_joints, _row, _write
+from drive_envelope._src.adapters.physx.runner import _STATE, _attached, _physx, _row, _sample, _write
 from drive_envelope._src.adapters.physx.stand import check_time_step
 from drive_envelope._src.scenario.chain import ChainScenario
 from drive_envelope._src.scenario.chain_frames import rotate
@@ -76,14 +76,14 @@ def _step(physx: Any, scenario: ChainScenario) -> tuple[np.ndarray, np.ndarray, 
     wrenches = _external_wrenches(scenario)
     steps = scenario.simulation.steps
     samples = np.zeros((3, steps + 1, len(joints)))
-    samples[:2, 0] = _sample(physx, paths, _STATE[:2])
+    samples[:2, 0] = _sample(physx, _STATE[:2], paths)
     for i in range(1, steps + 1):
         for path, row in applied:
             _write(physx, joint_type, "jointActuationForce", path, row)
         for path, wrench in wrenches.items():
             _write(physx, link_type, "wrench", path, wrench)
         physx.step_sync(scenario.simulation.dt)
-        samples[:, i] = _sample(physx, paths, _STATE)
+        samples[:, i] = _sample(physx, _STATE, paths)
     samples[:2] /= scale
     return samples[0], samples[1], samples[2]
 
@@ -109,8 +109,3 @@ def _external_wrenches(scenario: ChainScenario) -> dict[str, np.ndarray]:
         for path, sign in targets:
             wrenches[path] = wrenches.get(path, np.zeros(9, dtype=np.float32)) + sign * wrench
     return wrenches
-
-
-def _sample(physx: Any, paths: list[str], attributes: tuple[str, ...]) -> np.ndarray:
-    values = _read_joints(physx, attributes)
-    return np.array([[float(values[name][path][0]) for path in paths] for name in attributes])

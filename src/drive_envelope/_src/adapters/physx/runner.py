@@ -350,7 +350,7 @@ def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
     wrench = np.zeros(9, dtype=np.float32)
     wrench[5 if revolute else 0] = load
     samples = np.zeros((3, job.steps + 1))
-    samples[:2, 0] = _sample(physx, _STATE[:2])
+    samples[:2, 0] = _sample(physx, _STATE[:2])[:, 0]
     schedule = _schedule(job)
     last: dict[str, float] = {}
     for i in range(1, job.steps + 1):
@@ -363,7 +363,7 @@ def _step_job(physx: Any, job: PhysxJob) -> PhysxResult:
                 _write(physx, joint_type, attribute, JOINT_PATH, _row(value))
                 last[attribute] = value
         physx.step_sync(job.dt)
-        samples[:, i] = _sample(physx, _STATE)
+        samples[:, i] = _sample(physx, _STATE)[:, 0]
     position, velocity, effort = samples / np.array([[coordinate], [coordinate], [job.effort_scale]])
     if revolute:
         position = _unwrap(position, velocity, job.dt)
@@ -386,10 +386,10 @@ def _row(value: float) -> npt.NDArray[np.float32]:
     return np.array([value], dtype=np.float32)
 
 
-def _sample(physx: Any, attributes: Sequence[str]) -> list[float]:
-    """The stand joint's single-axis values of some attributes, in ovphysx's units."""
-    values = _read_joints(physx, attributes, JOINT_PATH)
-    return [float(values[name][JOINT_PATH][0]) for name in attributes]
+def _sample(physx: Any, attributes: Sequence[str], paths: Sequence[str] = (JOINT_PATH,)) -> np.ndarray:
+    """Single-axis values of ``attributes`` (rows) of the joints at ``paths`` (columns), ovphysx units."""
+    values = _read_joints(physx, attributes, paths[0] if len(paths) == 1 else None)  # one: read only it
+    return np.array([[float(values[name][path][0]) for path in paths] for name in attributes])
 
 
 def _unwrap(
