@@ -56,10 +56,11 @@ def _errors(errors: tuple[LogError, ...]) -> dict[str, Any]:
 
 
 def _engine_errors(values: dict[str, float]) -> dict[str, Any]:
-    return {
-        "mae_position": dict(values),
-        "mae_position_mean": sum(values.values()) / len(values) if values else None,
-    }
+    return {"mae_position": dict(values), "mae_position_mean": _mean(values) if values else None}
+
+
+def _mean(values: dict[str, float]) -> float:  # of another engine's per-log errors
+    return sum(values.values()) / len(values)
 
 
 def identification_to_dict(result: Identification) -> dict[str, Any]:
@@ -149,11 +150,8 @@ def identification_text(result: Identification) -> str:
         summary = [f"mean position error: train {scale * mean_error(result.train):.2f} {unit}"]
         if result.validation:
             summary.append(f"validation {scale * mean_error(result.validation):.2f} {unit}")
-        if result.engine != "reference" and result.engine_train:
-            engine_train = sum(result.engine_train.values()) / len(result.engine_train)
-            summary.append(f"train in {result.engine} {scale * engine_train:.2f} {unit}")
-        if result.engine_validation:
-            engine_validation = sum(result.engine_validation.values()) / len(result.engine_validation)
-            summary.append(f"validation in {result.engine} {scale * engine_validation:.2f} {unit}")
+        for kind, replays in (("train", result.engine_train), ("validation", result.engine_validation)):
+            if replays:  # only another engine's run has them
+                summary.append(f"{kind} in {result.engine} {scale * _mean(replays):.2f} {unit}")
         lines.append(", ".join(summary) + f"; {result.wall_time_s:.1f} s")
     return "\n".join(lines)

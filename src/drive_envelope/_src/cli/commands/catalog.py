@@ -98,6 +98,7 @@ def _show(name: str, *, sources: bool, as_json: bool) -> int:
 def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
     from drive_envelope._src.datasheet.catalog import catalog_entries, load_catalog_datasheet, no_match_error
     from drive_envelope._src.datasheet.derive import derive
+    from drive_envelope._src.envelope.model import ENVELOPE_FIELDS
     from drive_envelope._src.format import format_table, format_value
 
     entries = catalog_entries(joint=joint, search=search)
@@ -123,10 +124,7 @@ def _list(joint: str | None, search: str | None, *, as_json: bool) -> int:
                 "joint": entry.joint,
                 "description": entry.description,
                 "sources": list(entry.sources),
-                "max_effort": env.max_effort,
-                "max_actuator_velocity": env.max_actuator_velocity,
-                "velocity_dependent_resistance": env.velocity_dependent_resistance,
-                "speed_effort_gradient": env.speed_effort_gradient,
+                **{field: getattr(env, field) for field in ENVELOPE_FIELDS},
             }
         )
     if as_json:
