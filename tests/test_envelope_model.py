@@ -315,3 +315,38 @@ def test_a_string_with_units_in_the_constructor_points_to_from_dict() -> None:
     with pytest.raises(InputError, match=r"^max_effort must be a number, got None$"):
         PerformanceEnvelope(max_effort=None)  # type: ignore[arg-type]
     assert PerformanceEnvelope.from_dict({"max_effort": "12 N*m"}).max_effort == 12.0
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"),
+    [
+        (None, "None"),
+        ("3", "'3'"),
+        (True, "True"),
+        ([None, 1.0], "an array of object"),
+        (["1"], "an array of <U1"),
+    ],
+)
+def test_not_numbers_are_refused_naming_the_argument(value: object, shown: str) -> None:
+    """NumPy reads None as NaN (a silent 0: the drive lets go) and "3" as 3.0: each is one line instead."""
+    env = PerformanceEnvelope(max_effort=10.0, max_actuator_velocity=5.0, velocity_dependent_resistance=0.1)
+    calls = {
+        "effort_limit: velocity": lambda: env.effort_limit(value),
+        "clamp_effort: effort": lambda: clamp_effort(env, value, 1.0),
+        "clamp_effort_implicit: velocity": lambda: de.clamp_effort_implicit(env, 1.0, value, 2.0, 0.01),
+        "clamp_drive_impulse: max_impulse": lambda: de.clamp_drive_impulse(
+            0.0, 0.0, 1.0, 2.0, 5.0, value, 0, 0
+        ),
+    }
+    for where, call in calls.items():
+        with pytest.raises(
+            InputError, match=f"^{where}: expected numbers .*, got {shown}$".replace("(", r"\(")
+        ):
+            call()
+
+
+def test_numbers_of_every_kind_pass() -> None:
+    """Python and NumPy scalars of any width, lists and integer arrays are numbers."""
+    env = PerformanceEnvelope(max_effort=10.0, max_actuator_velocity=5.0, velocity_dependent_resistance=0.1)
+    for speed in (1, 1.0, np.float32(1.0), np.int64(1), [1.0], np.array([1], dtype=np.int32)):
+        assert np.all(env.effort_limit(speed) == pytest.approx(9.9))

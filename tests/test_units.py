@@ -139,3 +139,13 @@ def test_format_si() -> None:
     """Format SI values for reports, infinity included."""
     assert format_si(12.05568, "N*m") == "12.0557 N*m"
     assert format_si(math.inf, "rad/s") == "inf rad/s"
+
+
+def test_numpy_scalars_are_numbers() -> None:
+    """numpy.float32 is not a Python float: a gain read from an array still converts (its own bits)."""
+    import numpy as np
+
+    assert to_si(np.float32(2.5), "N*m", "kp") == 2.5
+    assert to_si(np.int64(3), "N*m", "kp") == 3.0
+    with pytest.raises(UnitsError, match=r"^kp: expected a torque in N\*m .*, got bool"):
+        to_si(np.bool_(True), "N*m", "kp")

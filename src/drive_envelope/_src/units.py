@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import re
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, SupportsFloat
 
 from drive_envelope._src.errors import UnitsError
 
@@ -257,7 +258,7 @@ def _is_energy_for_torque(quantity: pint.Quantity, expected: str) -> bool:
     return "N*m" in expected.replace(" ", "") and any(name.endswith("joule") for name in names)
 
 
-def _bare_number(value: int | float, where: str) -> float:
+def _bare_number(value: SupportsFloat, where: str) -> float:
     try:
         result = float(value)
     except OverflowError:
@@ -288,7 +289,7 @@ def to_si(value: object, expected: str, where: str) -> float:
     ureg = get_registry()
     if isinstance(value, bool) or value is None:
         raise UnitsError(f"{where}: expected {describe_unit(expected)}, got {value!r}")
-    if isinstance(value, (int, float)):
+    if isinstance(value, numbers.Real):  # NumPy's scalars too (numpy.float32 is not a float)
         return _bare_number(value, where)
     if isinstance(value, str):
         parsed, magnitude = _parse(value, where)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Collection, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -79,3 +80,26 @@ def broadcast_shape(where: str, names: Sequence[str], shapes: Sequence[tuple[int
     except ValueError:
         listed = ", ".join(f"{n}={tuple(s)}" for n, s in zip(names, shapes, strict=True))
         raise InputError(f"{where}: shapes do not broadcast ({listed})") from None
+
+
+def check_numbers(where: str, **values: Any) -> None:
+    """Refuse an argument that is not numbers: None, text, booleans, objects (one line naming it).
+
+    NumPy reads ``None`` as NaN (which lets a drive go) and ``"3"`` as 3.0, so such a mistake would
+    give a silent 0 or a number the user never meant. Arrays and Python numbers pass at once.
+    """
+    for name, value in values.items():
+        if isinstance(value, bool):
+            pass
+        elif isinstance(value, (float, int, np.floating, np.integer)):
+            continue
+        elif isinstance(value, np.ndarray):
+            if value.dtype.kind in "fiu":
+                continue
+        elif type(value).__module__.split(".")[0] in ("torch", "warp", "jax"):
+            continue  # another backend's array: its own port reads it
+        elif np.asarray(value).dtype.kind in "fiu":
+            continue
+        shown = repr(value) if np.ndim(value) == 0 else f"an array of {np.asarray(value).dtype}"
+        expected = "numbers (a float, an int or an array of them)"
+        raise InputError(f"{where}: {name}: expected {expected}, got {shown}")

@@ -70,7 +70,7 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.bitselect import bits, int_mask, into, select, sign_bit_pattern
 from drive_envelope._src.envelope.model import PerformanceEnvelope, require_envelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.validation import broadcast_shape
+from drive_envelope._src.validation import broadcast_shape, check_numbers
 
 PX_EPS_F32 = float(np.finfo(np.float32).eps)
 """PhysX's absolute epsilon for near-zero denominators, ``FLT_EPSILON = 2^-23``."""
@@ -109,6 +109,7 @@ def clamp_effort(envelope: PerformanceEnvelope, effort: npt.ArrayLike, velocity:
         Clamped effort [N*m or N], float64, broadcast shape; never NaN.
     """
     envelope = require_envelope(envelope, "clamp_effort")
+    check_numbers("clamp_effort", effort=effort, velocity=velocity)
     effort = np.asarray(effort, dtype=np.float64)
     shape = broadcast_shape("clamp_effort", ("effort", "velocity"), (effort.shape, np.shape(velocity)))
     limit = envelope.effort_limit(velocity)  # >= 0, never NaN
@@ -168,6 +169,8 @@ def clamp_effort_implicit(
         InputError: ``dt`` not a finite number ``> 0``, or a negative ``response``.
     """
     envelope, step = require_envelope(envelope, "clamp_effort_implicit"), check_time_step(dt)
+    numbers = dict(requested_effort=requested_effort, velocity=velocity, response=response)
+    check_numbers("clamp_effort_implicit", **numbers, applied_effort=applied_effort)
     r = np.asarray(response, dtype=np.float64)
     negative = r < 0.0  # a NaN response is not refused: it lets the drive go, as any NaN does
     if negative.any():
@@ -231,21 +234,12 @@ def clamp_drive_impulse(
         The clamped total drive impulse [N*m*s or N*s], of ``dtype``, broadcast shape.
     """
     kind: np.dtype[Any] = np.dtype(dtype)
+    values: tuple[npt.ArrayLike, ...] = (joint_vel0, drive_impulse0, drive_impulse, response)
+    values += (max_joint_vel, max_impulse, speed_impulse_gradient, velocity_dependent_resistance)
+    check_numbers("clamp_drive_impulse", **dict(zip(CLAMP_DRIVE_IMPULSE_ARGS, values, strict=True)))
     if kind not in (np.float32, np.float64):
         raise ValueError(f"dtype must be numpy.float32 or numpy.float64, got {kind}")
-    args = [
-        np.asarray(a, dtype=kind)
-        for a in (
-            joint_vel0,
-            drive_impulse0,
-            drive_impulse,
-            response,
-            max_joint_vel,
-            max_impulse,
-            speed_impulse_gradient,
-            velocity_dependent_resistance,
-        )
-    ]
+    args = [np.asarray(a, dtype=kind) for a in values]
     shape = broadcast_shape("clamp_drive_impulse", CLAMP_DRIVE_IMPULSE_ARGS, [a.shape for a in args])
     # IEEE overflow, inf - inf and x/0 happen inside PhysX too and are part of what we reproduce
     with np.errstate(divide="ignore", over="ignore", invalid="ignore", under="ignore"):

@@ -33,7 +33,7 @@ import numpy.typing as npt
 
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.params.table import si_unit
-from drive_envelope._src.validation import nearest_key
+from drive_envelope._src.validation import check_numbers, nearest_key
 from drive_envelope._src.values import read_quantity
 
 JointType = Literal["revolute", "prismatic"]
@@ -124,6 +124,7 @@ class PerformanceEnvelope:
             feasible at that speed. A NaN velocity gives 0 (the drive lets go); an infinite one the
             limit at infinite speed: 0 when ``R > 0`` or ``v_max`` is finite, else ``max_effort``.
         """
+        check_numbers("effort_limit", velocity=velocity)
         speed = np.array(velocity, dtype=np.float64)  # a copy, 0-d for a scalar
         return self._effort_limit_of_speed(np.abs(speed, out=speed))
 
