@@ -103,3 +103,18 @@ def check_numbers(where: str, **values: Any) -> None:
         shown = repr(value) if np.ndim(value) == 0 else f"an array of {np.asarray(value).dtype}"
         expected = "numbers (a float, an int or an array of them)"
         raise InputError(f"{where}: {name}: expected {expected}, got {shown}")
+
+
+def refuse_negative_response(response: object, *, device_array: type | None = None) -> None:
+    """A negative ``response`` given on the host (number, list, NumPy array): a one-line InputError.
+
+    A ``device_array`` (a torch tensor, a ``wp.array``) is not read: that would copy it back from the
+    device (a negative value in it gives the guarded result). A NaN is not refused: it lets go.
+    """
+    if device_array is not None and isinstance(response, device_array):
+        return
+    values = np.asarray(response, dtype=np.float64)
+    negative = values < 0.0
+    if negative.any():
+        bad = float(values[negative].flat[0])
+        raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")

@@ -70,7 +70,7 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.bitselect import bits, int_mask, into, select, sign_bit_pattern
 from drive_envelope._src.envelope.model import PerformanceEnvelope, require_envelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.validation import broadcast_shape, check_numbers
+from drive_envelope._src.validation import broadcast_shape, check_numbers, refuse_negative_response
 
 PX_EPS_F32 = float(np.finfo(np.float32).eps)
 """PhysX's absolute epsilon for near-zero denominators, ``FLT_EPSILON = 2^-23``."""
@@ -171,11 +171,8 @@ def clamp_effort_implicit(
     envelope, step = require_envelope(envelope, "clamp_effort_implicit"), check_time_step(dt)
     numbers = dict(requested_effort=requested_effort, velocity=velocity, response=response)
     check_numbers("clamp_effort_implicit", **numbers, applied_effort=applied_effort)
+    refuse_negative_response(response)
     r = np.asarray(response, dtype=np.float64)
-    negative = r < 0.0  # a NaN response is not refused: it lets the drive go, as any NaN does
-    if negative.any():
-        bad = float(r[negative].flat[0])
-        raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")
     requested = np.asarray(requested_effort, dtype=np.float64)
     broadcast_shape(
         "clamp_effort_implicit",

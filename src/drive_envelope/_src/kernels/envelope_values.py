@@ -87,18 +87,3 @@ def envelope_columns(
         name: np.array([getattr(env, name) for env in envelopes], dtype=np.float64)
         for name in ENVELOPE_FIELDS
     }
-
-
-def refuse_negative_response(response: object, *, device_array: type) -> None:
-    """A negative ``response`` given on the host (number, list, NumPy array): a one-line InputError.
-
-    A ``device_array`` (a torch tensor, a ``wp.array``) is not read: that would copy it back from the
-    device (a negative value in it gives the guarded result). A NaN is not refused: it lets go.
-    """
-    if isinstance(response, device_array):
-        return
-    values = np.asarray(response, dtype=np.float64)
-    negative = values < 0.0
-    if negative.any():
-        bad = float(values[negative].flat[0])
-        raise InputError(f"response: expected >= 0 [rad/s/(N*m*s) or m/s/(N*s)], got {bad!r}")

@@ -39,7 +39,6 @@ from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.envelope.clamp import check_time_step
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.envelope_values import refuse_negative_response
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
     broadcast_states,
@@ -52,6 +51,7 @@ from drive_envelope._src.kernels.torch_ops import (
     clamp_effort_implicit,
     implicit_effort_tensors,
 )
+from drive_envelope._src.validation import refuse_negative_response
 
 if TYPE_CHECKING:
     import torch

@@ -29,7 +29,6 @@ from drive_envelope._src.envelope.clamp import (
     PX_MAX_F32,
     check_time_step,
 )
-from drive_envelope._src.kernels.envelope_values import refuse_negative_response
 from drive_envelope._src.kernels.torch_envelope import (
     EnvelopeTensors,
     broadcast_states,
@@ -38,7 +37,7 @@ from drive_envelope._src.kernels.torch_envelope import (
     resolve_dtype,
     state_tensors,
 )
-from drive_envelope._src.validation import broadcast_shape
+from drive_envelope._src.validation import broadcast_shape, refuse_negative_response
 
 if TYPE_CHECKING:
     import torch

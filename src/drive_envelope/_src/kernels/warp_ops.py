@@ -22,12 +22,8 @@ import numpy.typing as npt
 from drive_envelope._src.envelope.clamp import CLAMP_DRIVE_IMPULSE_ARGS, check_time_step
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.kernels.envelope_values import (
-    envelope_columns,
-    read_envelope_values,
-    refuse_negative_response,
-)
-from drive_envelope._src.validation import broadcast_shape
+from drive_envelope._src.kernels.envelope_values import envelope_columns, read_envelope_values
+from drive_envelope._src.validation import broadcast_shape, refuse_negative_response
 
 
 def _warp() -> ModuleType:
