@@ -520,6 +520,12 @@ def test_bad_clip_fields_are_one_line_errors(fields: dict[str, Any], message: st
         _Articulation({"legs": _cfg(**fields)})
 
 
+def test_a_physics_dt_in_milliseconds_is_said() -> None:
+    """physics_dt = 5 (meant 5 ms) steps 5 s: a warning says it is seconds and what 5 ms is."""
+    with pytest.warns(UserWarning, match=r"physics_dt = 5 s is a very long physics step .* 5 ms is 0\.005$"):
+        _Articulation({"legs": _cfg(effective_inertia=0.1, physics_dt=5)})
+
+
 def test_end_of_step_without_a_response_says_what_to_set() -> None:
     """Without effective_inertia or a mass-matrix response, the first compute names the three ways."""
     import torch

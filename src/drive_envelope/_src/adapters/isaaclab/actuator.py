@@ -25,6 +25,7 @@ loaded on first use.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -134,8 +135,19 @@ def inertia_value(value: Any) -> Any:
     return read_joint_quantity(value, "kg*m^2", "kg", where)
 
 
+_LONGEST_STEP = 0.1
+"""[s] Robot physics steps are 0.1-20 ms: a ``physics_dt`` above this is probably milliseconds."""
+
+
 def time_step(value: Any) -> float:
-    """The cfg's ``physics_dt`` [s], finite and > 0."""
+    """The cfg's ``physics_dt`` [s], finite and > 0 (a warning above :data:`_LONGEST_STEP`)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < float(value) < math.inf:
         raise InputError(f"{CFG_NAME}.physics_dt: got {value!r}; expected a time step > 0 and finite [s]")
+    if value > _LONGEST_STEP:
+        warnings.warn(
+            f"{CFG_NAME}.physics_dt = {value:g} s is a very long physics step (robots step 0.1-20 ms); "
+            f"physics_dt is in seconds: {value:g} ms is {value / 1000:g}",
+            UserWarning,
+            stacklevel=3,
+        )
     return float(value)
