@@ -72,6 +72,9 @@ def test_add_drive_builds_a_model_that_round_trips_through_mjcf(mujoco: Any, tmp
 
     exact = write_mjcf(spec, tmp_path / "arm.xml")  # every digit, and checked to load
     np.testing.assert_array_equal(exact.actuator_dynprm, model.actuator_dynprm)
+    with pytest.raises(InputError, match=r"output '.*arm\.toml': expected an \.xml file name \(MJCF\)$"):
+        write_mjcf(spec, tmp_path / "arm.toml")  # a map or envelope file name given by mistake
+    assert not (tmp_path / "arm.toml").exists()
 
 
 def test_add_drive_refuses_bad_joints_and_arguments(mujoco: Any) -> None:

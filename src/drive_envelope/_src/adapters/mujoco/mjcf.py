@@ -409,10 +409,13 @@ def write_mjcf(
         The model compiled from the written file.
 
     Raises:
-        InputError: the result does not compile (nothing is written), or the file cannot be written.
+        InputError: ``output`` is not an ``.xml`` file name, the result does not compile (nothing is
+            written), or the file cannot be written.
     """
     import mujoco
 
+    if Path(output).suffix.lower() != ".xml":
+        raise InputError(f"write_mjcf: output {os.fspath(output)!r}: expected an .xml file name (MJCF)")
     from drive_envelope._src.adapters.mujoco.precision import (
         LOSS_TOLERANCE,
         full_precision,
