@@ -291,37 +291,38 @@ bool SolverSetting::FromModel(const mjModel* m, int id, SolverSetting* setting,
   }
   int size = m->numeric_size[id];
   const mjtNum* value = m->numeric_data + m->numeric_adr[id];
-  std::string where = std::string("custom numeric '") + kSolverNumeric + "'";
+  // read at every step: the message's text is built only for an error (no allocation otherwise)
+  auto where = [] { return std::string("custom numeric '") + kSolverNumeric + "'"; };
   if (size != 3 && size != 4) {
-    *error = where + " has " + std::to_string(size) +
+    *error = where() + " has " + std::to_string(size) +
              " number(s): expected 'solver position_iterations velocity_iterations [constraints]' "
              "(solver 0 exact, 1 pgs, 2 tgs)";
     return false;
   }
   double kind = value[0], position = value[1], velocity = value[2];
   if (!(kind == 0 || kind == 1 || kind == 2)) {
-    *error = where + "[0] (solver) = " + Number(kind) + ": expected 0 (exact), 1 (pgs) or 2 (tgs)";
+    *error = where() + "[0] (solver) = " + Number(kind) + ": expected 0 (exact), 1 (pgs) or 2 (tgs)";
     return false;
   }
   if (!(position >= 1 && position <= kMaxIterations && position == std::floor(position))) {
-    *error = where + "[1] (position_iterations) = " + Number(position) +
+    *error = where() + "[1] (position_iterations) = " + Number(position) +
              ": expected an integer in [1, 255]";
     return false;
   }
   if (!(velocity >= 0 && velocity <= kMaxIterations && velocity == std::floor(velocity))) {
-    *error = where + "[2] (velocity_iterations) = " + Number(velocity) +
+    *error = where() + "[2] (velocity_iterations) = " + Number(velocity) +
              ": expected an integer in [0, 255]";
     return false;
   }
   double constraints = size == 4 ? value[3] : 0;
   if (!(constraints == 0 || constraints == 1)) {
-    *error = where + "[3] (constraints) = " + Number(constraints) +
+    *error = where() + "[3] (constraints) = " + Number(constraints) +
              ": expected 0 (drives solved before MuJoCo's constraints) or 1 (with them)";
     return false;
   }
   if (constraints == 1 && kind != 0) {
     // PhysX's PGS/TGS iterate the drives against the articulation alone: no rule to port
-    *error = where + "[3] (constraints) = 1 with solver " + Number(kind) +
+    *error = where() + "[3] (constraints) = 1 with solver " + Number(kind) +
              ": expected solver 0 (exact); pgs and tgs solve the drives before the constraints";
     return false;
   }
