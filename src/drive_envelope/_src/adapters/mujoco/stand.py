@@ -44,11 +44,12 @@ from drive_envelope._src.adapters.mujoco.params import NO_LIMIT, PARAM_BOUND
 from drive_envelope._src.adapters.mujoco.spec import MjDrive, add_drive
 from drive_envelope._src.envelope.model import NO_LIMIT_FIELDS, JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
-from drive_envelope._src.scenario.chain import ChainScenario
-from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory
+from drive_envelope._src.scenario.chain import ChainJoint, ChainScenario
+from drive_envelope._src.scenario.chain_trajectory import ChainTrajectory, chain_run
+from drive_envelope._src.scenario.loads import FrictionSpec
 from drive_envelope._src.scenario.schedule import DriveSchedule
-from drive_envelope._src.scenario.spec import DriveSpec, Scenario
-from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.scenario.spec import DriveSpec, JointSpec, Scenario
+from drive_envelope._src.scenario.trajectory import Trajectory, stand_run
 
 if TYPE_CHECKING:
     import mujoco
@@ -139,8 +140,7 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
 
     spec = mujoco.MjSpec()
     spec.modelname = scenario.name or "teststand"
-    dt = scenario.simulation.dt
-    spec.option.timestep = dt
+    spec.option.timestep = scenario.simulation.dt
     spec.option.gravity = [0.0, 0.0, 0.0]
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     inertia = scenario.joint.inertia
@@ -148,28 +148,44 @@ def stand_spec(scenario: Scenario) -> tuple[mujoco.MjSpec, MjDrive]:
     pendulum = scenario.pendulum
     if scenario.joint.type == "revolute":
         body.mass, body.inertia = 1.0, [inertia, inertia, inertia]
-        joint_type = mujoco.mjtJoint.mjJNT_HINGE
     else:
         body.mass, body.inertia = inertia, [1.0, 1.0, 1.0]
-        joint_type = mujoco.mjtJoint.mjJNT_SLIDE
     if pendulum is not None:  # straight down (-Y, along gravity) at position = -angle_offset
         offset, distance = pendulum.angle_offset, pendulum.distance
         body.mass = pendulum.mass
         body.ipos = [distance * math.sin(offset), -distance * math.cos(offset), 0.0]
         spec.option.gravity = [0.0, -scenario.simulation.gravity, 0.0]
-    friction = scenario.friction
-    joint = body.add_joint(name="joint", type=joint_type, axis=[0.0, 0.0, 1.0])
-    joint.armature = scenario.joint.armature
-    joint.damping = [friction.viscous_friction, 0.0, 0.0]  # MuJoCo 4: linear, then higher-order terms
-    joint.frictionloss = friction.dynamic_friction
-    joint.solref_friction = [2.0 * dt, 1.0]
-    joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
+    _add_joint(body, "joint", [0.0, 0.0, 1.0], scenario.joint, scenario.friction, scenario.simulation.dt)
     envelope = scenario.effective_envelope()
     drive = _add_stand_drive(spec, "joint", "drive", scenario.drive, envelope, scenario.joint.type)
     sim = scenario.simulation
     set_solver(spec, sim.solver, position_iterations=sim.position_iterations,
                velocity_iterations=sim.velocity_iterations)  # fmt: skip
     return spec, drive
+
+
+def _add_joint(
+    body: Any,
+    name: str,
+    axis: list[float],
+    joint: JointSpec | ChainJoint,
+    friction: FrictionSpec,
+    dt: float,
+) -> None:
+    """A hinge or slide (``joint.type``) along ``axis`` with the joint's armature and ``friction``.
+
+    Viscous friction is the linear ``damping``; Coulomb friction the ``frictionloss`` constraint,
+    made hard (``solreffriction = (2*dt, 1)``) so that a stopping joint sticks as in PhysX.
+    """
+    import mujoco
+
+    kind = mujoco.mjtJoint.mjJNT_HINGE if joint.type == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
+    added = body.add_joint(name=name, type=kind, axis=axis)
+    added.armature = joint.armature
+    added.damping = [friction.viscous_friction, 0.0, 0.0]  # MuJoCo 4: linear, then higher-order terms
+    added.frictionloss = friction.dynamic_friction
+    added.solref_friction = [2.0 * dt, 1.0]
+    added.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
 
 
 def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Trajectory:
@@ -202,7 +218,6 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
         effort=scenario.load.applied_effort,
     )
     count = scenario.simulation.steps
-    time = np.arange(count + 1, dtype=np.float64) * scenario.simulation.dt
     position, velocity, effort = np.empty(count + 1), np.empty(count + 1), np.zeros(count + 1)
     position[0], velocity[0] = data.qpos[0], data.qvel[0]
     with mujoco_warnings(_drop):
@@ -212,16 +227,7 @@ def simulate(scenario: Scenario, *, schedule: DriveSchedule | None = None) -> Tr
             mujoco.mj_step(model, data)
             _raise_on_warning(_where(scenario), data, i)
             position[i], velocity[i], effort[i] = data.qpos[0], data.qvel[0], data.actuator_force[0]
-    return Trajectory(
-        time=time,
-        position=position,
-        velocity=velocity,
-        effort=effort,
-        joint=scenario.joint.type,
-        engine="mujoco",
-        name=scenario.name,
-        metadata=_metadata(scenario),
-    )
+    return stand_run(scenario, "mujoco", position, velocity, effort, **_metadata(scenario))
 
 
 def _command(
@@ -278,12 +284,11 @@ def _raise_on_warning(where: str, data: mujoco.MjData, step: int) -> None:
 
 
 def _metadata(scenario: Scenario) -> dict[str, object]:
+    """What a one-joint run's metadata adds to the solver settings (:func:`stand_run` puts them first)."""
     import mujoco
 
-    sim = scenario.simulation
     return {
-        **sim.metadata(),
-        "plugin_solver": sim.solver,
+        "plugin_solver": scenario.simulation.solver,
         "mujoco_version": str(mujoco.__version__),
         "integrator": "Euler",
         "plugin": PLUGIN_NAME,
@@ -323,20 +328,12 @@ def chain_spec(scenario: ChainScenario) -> tuple[mujoco.MjSpec, list[MjDrive]]:
         body.mass, body.ipos, body.inertia = joint.mass, list(joint.com), list(joint.inertia)
         body.iquat = list(joint.inertia_quat)
         bodies.append(body)
-        axis = list(joint.axis_vector)
-        kind = mujoco.mjtJoint.mjJNT_HINGE if joint.type == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
-        mj_joint = body.add_joint(name=joint.name, type=kind, axis=axis)
-        mj_joint.armature = joint.armature
-        friction = joint.friction
-        if friction.static_friction != friction.dynamic_friction:
+        if joint.friction.static_friction != joint.friction.dynamic_friction:
             raise InputError(
                 f"joint {joint.name!r}: key 'friction.static_friction': the mujoco engine has one Coulomb "
                 "friction (frictionloss) and needs it equal to friction.dynamic_friction"
             )
-        mj_joint.damping = [friction.viscous_friction, 0.0, 0.0]
-        mj_joint.frictionloss = friction.dynamic_friction
-        mj_joint.solref_friction = [2.0 * sim.dt, 1.0]
-        mj_joint.solimp_friction = [0.9999, 0.9999, 0.001, 0.5, 2.0]
+        _add_joint(body, joint.name, list(joint.axis_vector), joint, joint.friction, sim.dt)
         envelope = joint.effective_envelope()
         drives.append(
             _add_stand_drive(spec, joint.name, f"{joint.name}_drive", joint.drive, envelope, joint.type)
@@ -378,22 +375,8 @@ def simulate_chain(scenario: ChainScenario) -> ChainTrajectory:
                 data.qvel[dof],
                 data.actuator_force[actuators],
             )
-    sim = scenario.simulation
-    return ChainTrajectory(
-        time=np.arange(count + 1, dtype=np.float64) * sim.dt,
-        position=position,
-        velocity=velocity,
-        effort=effort,
-        joints=scenario.names,
-        types=tuple(joint.type for joint in joints),
-        engine="mujoco",
-        name=scenario.name,
-        metadata={
-            **sim.metadata(),
-            "mujoco_version": str(mujoco.__version__),
-            "integrator": "Euler",
-            "plugin": PLUGIN_NAME,
-            "plugin_solver": sim.solver,
-            "effort_source": "the plugin's actuator force (drive + applied effort)",
-        },
-    )
+    return chain_run(
+        scenario, "mujoco", position, velocity, effort, mujoco_version=str(mujoco.__version__),
+        integrator="Euler", plugin=PLUGIN_NAME, plugin_solver=scenario.simulation.solver,
+        effort_source="the plugin's actuator force (drive + applied effort)",
+    )  # fmt: skip

@@ -42,7 +42,7 @@ from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvel
 from drive_envelope._src.errors import EngineWarning, InputError
 from drive_envelope._src.scenario.checks import one_solve_tgs_note
 from drive_envelope._src.scenario.spec import Scenario
-from drive_envelope._src.scenario.trajectory import Trajectory
+from drive_envelope._src.scenario.trajectory import Trajectory, stand_run
 
 DRIVES = ("physx", "actuator")
 """How the stand's drive runs: PhysX's PGS/TGS iteration (a Warp kernel), or Newton's actuator stack."""
@@ -242,16 +242,7 @@ def _run(scenario: Scenario, progress: Callable[[int, int], None] | None, drive:
             progress(i, count)
     if let_go is not None:
         let_go.report(dt)
-    return Trajectory(
-        time=np.arange(count + 1, dtype=np.float64) * dt,
-        position=position,
-        velocity=velocity,
-        effort=effort,
-        joint=scenario.joint.type,
-        engine="newton",
-        name=scenario.name,
-        metadata=_metadata(scenario, drive),
-    )
+    return stand_run(scenario, "newton", position, velocity, effort, **_metadata(scenario, drive))
 
 
 _StepEffort = Callable[[Any, Any], tuple[float, Callable[[Any], None] | None]]
@@ -388,17 +379,16 @@ def _can_brake(envelope: PerformanceEnvelope, speed: float, response: float, req
 
 
 def _metadata(scenario: Scenario, drive: str) -> dict[str, object]:
+    """What a run's metadata adds to the solver settings (:func:`stand_run` puts them first)."""
     import newton
 
-    sim = scenario.simulation
     data: dict[str, object] = {
-        **sim.metadata(),
         "newton_version": str(newton.__version__),
         "newton_solver": "SolverFeatherstone",
         "drive": drive,
     }
     if drive == "physx":
-        data["drive_solver"] = sim.solver
+        data["drive_solver"] = scenario.simulation.solver
         data["effort_source"] = "PhysX's drive iteration (Warp kernel), applied as joint_f"
     else:
         data["effort_mode"] = "implicit"
