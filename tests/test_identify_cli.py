@@ -325,6 +325,35 @@ def test_a_log_without_the_duty_gain_the_others_have_is_a_warning(
     assert str(logs[0]) + ":" not in err  # matching sidecars say nothing
 
 
+def test_a_log_without_the_duty_gain_is_warned_once_even_given_twice(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A log both trained on and validated on is one log: one warning."""
+    stand, logs = bench
+    _sidecar(logs[0], name="run0", kp_duty_per_rad=2.0)
+    argv = ["identify", str(logs[0]), str(logs[1]), "--validate", str(logs[1]), "--stand", str(stand)]
+    err = _warnings(main, [*argv, "--fit", "max_effort"], capsys)
+    assert err.count(f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one)") == 1
+
+
+def test_replay_warns_a_log_without_the_duty_gain_the_others_have(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """replay uses the stand's [servo] gain for it, as identify does, and says so once on stderr."""
+    stand, logs = bench
+    _sidecar(logs[0], name="run0", kp_duty_per_rad=2.0)
+    assert main(["replay", str(logs[0]), str(logs[1]), "--stand", str(stand)]) == 0
+    err = capsys.readouterr().err
+    line = (
+        f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one): "
+        "uses the stand's servo.duty_per_rad = 1"
+    )
+    assert err.count(line) == 1
+    assert str(logs[0]) + ":" not in err
+    assert main(["replay", str(logs[1]), "--stand", str(stand)]) == 0  # no sidecar anywhere: the stand's
+    assert capsys.readouterr().err == ""
+
+
 def test_stiffness_tied_to_the_duty_gain_is_shown_as_derived(
     main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
 ) -> None:

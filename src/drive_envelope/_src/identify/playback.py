@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -22,8 +23,8 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
 from drive_envelope._src.identify.parameters import parameter_units, start_values
 from drive_envelope._src.identify.replay import Replay
-from drive_envelope._src.identify.run import ENGINES, engine_errors, replay_errors
-from drive_envelope._src.identify.stand import IdentifyStand, read_stand
+from drive_envelope._src.identify.run import ENGINES, duty_notes, engine_errors, replay_errors
+from drive_envelope._src.identify.stand import IdentifyStand, StandWarning, read_stand
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -60,6 +61,10 @@ def replay_logs(
 ) -> Playback:
     """Replay ``logs`` through ``stand`` in ``engine`` (``bag`` and ``joint`` for ROS 2 bags).
 
+    Warns:
+        StandWarning: once per log without the sidecar ``kp_duty_per_rad`` other logs have (it is
+            replayed with the stand's ``[servo] duty_per_rad``).
+
     Raises:
         InputError: a bad log, stand or engine, or no log.
     """
@@ -76,6 +81,8 @@ def replay_logs(
         raise InputError(
             f"replay: log file name(s) given twice: {', '.join(twice)}; reports key logs by name"
         )
+    for note in duty_notes(setup, read):  # a gain sweep's log without its sidecar: said, not silent
+        warnings.warn(note, StandWarning, stacklevel=2)
     values = stand_values(setup)
     errors: dict[str, tuple[float, float | None]] = {}
     if engine == "reference":

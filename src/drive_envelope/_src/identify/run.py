@@ -367,7 +367,7 @@ def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
     """Warnings for sidecars that disagree with their log or the stand (a copied or stale file)."""
     notes = []
     pendulum = setup.scenario.pendulum
-    with_duty = [log for log in logs if log.duty_per_rad is not None]
+    logs = list({str(log.path): log for log in logs}.values())  # a log in train and validate: once
     for log in logs:
         sidecar = log.sidecar or {}
         stem = Path(log.path).name.split(".")[0]
@@ -394,12 +394,22 @@ def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
                     f"pendulum.{stand_key} = {expected:g}: the replay uses the stand's "
                     f"{expected:g} (fix whichever is wrong)"
                 )
-        if with_duty and log.duty_per_rad is None and setup.duty_per_rad is not None:
-            notes.append(
-                f"{log.path}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's "
-                f"servo.duty_per_rad = {setup.duty_per_rad:g}"
-            )
-    return tuple(notes)
+    return (*notes, *duty_notes(setup, logs))
+
+
+def duty_notes(setup: IdentifyStand, logs: Sequence[BenchLog]) -> tuple[str, ...]:
+    """One warning per log without the sidecar gain the others have: it uses the stand's [servo] gain.
+
+    A missing sidecar in a gain sweep would otherwise give that log a wrong stiffness silently.
+    """
+    if setup.duty_per_rad is None or all(log.duty_per_rad is None for log in logs):
+        return ()
+    paths = dict.fromkeys(str(log.path) for log in logs if log.duty_per_rad is None)
+    return tuple(
+        f"{path}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's "
+        f"servo.duty_per_rad = {setup.duty_per_rad:g}"
+        for path in paths
+    )
 
 
 def _bound_notes(space: ParameterSpace, values: dict[str, float]) -> tuple[str, ...]:
