@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import TypeVar
+
+_T = TypeVar("_T")
 
 
 def format_value(value: float | None, unit: str = "") -> str:
@@ -26,3 +29,9 @@ def format_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     ]
     lines.insert(1, "  ".join("-" * width for width in widths))
     return "\n".join(lines)
+
+
+def first_few(items: Sequence[_T], count: int, show: Callable[[_T], str] = repr) -> str:
+    """The first ``count`` of ``items`` (each written by ``show``, quoted by default) and N more."""
+    shown = ", ".join(show(item) for item in items[:count])
+    return shown + (f" and {len(items) - count} more" if len(items) > count else "")

@@ -32,6 +32,7 @@ from drive_envelope._src.adapters.usd.joint_map import case_hint, glob_hint, rea
 from drive_envelope._src.datasheet.resolve import resolve_envelope
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.format import first_few
 from drive_envelope._src.io.files import read_mapping
 
 _MAPPING_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
@@ -48,11 +49,6 @@ class UnusedKey:
     """Why: ``"matches no joint of the log"`` (with hints), or the earlier keys that took its joints."""
     where: str
     """The mapping and key, for messages: ``"joints.toml: key 'joints.elbow_*'"``."""
-
-
-def _names(names: Sequence[str]) -> str:
-    shown = ", ".join(repr(name) for name in names[:_SHOWN])
-    return shown + (f" and {len(names) - _SHOWN} more" if len(names) > _SHOWN else "")
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -102,8 +98,8 @@ class JointMapping:
             elif all(winners[joint] != index for joint in matched):
                 takers = dict.fromkeys(self.entries[i][0] for j in matched if (i := winners[j]) is not None)
                 reason = (
-                    f"never used: every joint of the log it matches ({_names(matched)}) takes "
-                    f"{_names(list(takers))} first (exact names first, then globs in file order)"
+                    f"never used: every joint of the log it matches ({first_few(matched, _SHOWN)}) takes "
+                    f"{first_few(list(takers), _SHOWN)} first (exact names first, then globs in file order)"
                 )
             else:
                 continue

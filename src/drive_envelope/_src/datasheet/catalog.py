@@ -18,6 +18,7 @@ from importlib.resources.abc import Traversable
 from drive_envelope._src.datasheet.load import datasheet_from_mapping
 from drive_envelope._src.datasheet.spec import Datasheet
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.format import first_few
 from drive_envelope._src.io.files import read_mapping
 from drive_envelope._src.validation import nearest_key
 
@@ -110,8 +111,7 @@ def no_match_error(search: str | None, joint: str | None = None) -> InputError:
     found = [e.key for e, text in zip(entries, texts, strict=True) if all(w and w in text for w in corrected)]
     hint = nearest_key(" ".join(words), [e.key for e in entries], cutoff=0.75)
     if not hint and found:
-        more = f" and {len(found) - 3} more" if len(found) > 3 else ""
-        hint = f" (did you mean --search {' '.join(corrected)!r}? it lists {', '.join(found[:3])}{more})"
+        hint = f" (did you mean --search {' '.join(corrected)!r}? it lists {first_few(found, 3, str)})"
     elif not hint and absent and len(absent) < len(words):
         hint = f" ({', '.join(map(repr, absent))} is in no entry)"
     flag = f" --joint {joint}" if joint else ""

@@ -30,6 +30,7 @@ from drive_envelope._src.adapters.mujoco.handle import MjDrive, read_number
 from drive_envelope._src.envelope.drive import DriveType
 from drive_envelope._src.envelope.model import JointType, PerformanceEnvelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.format import first_few
 from drive_envelope._src.params.table import si_unit
 
 if TYPE_CHECKING:
@@ -311,18 +312,13 @@ def _names(model: mujoco.MjModel, actuators: Sequence[int]) -> list[str]:
 
 
 def _listed(names: Sequence[str]) -> str:
-    shown = ", ".join(repr(n) for n in names[:6])
-    return (shown + f" and {len(names) - 6} more" if len(names) > 6 else shown) or "none"
+    return first_few(names, 6) or "none"
 
 
 def _drives_hint(drives: Sequence[MjDriveInfo]) -> str:
     if not drives:
         return "the model has no envelope drive"
-    return (
-        "its drives (actuator on joint): "
-        + ", ".join(f"{d.name!r} on {d.joint!r}" for d in drives[:6])
-        + (f" and {len(drives) - 6} more" if len(drives) > 6 else "")
-    )
+    return "its drives (actuator on joint): " + first_few(drives, 6, lambda d: f"{d.name!r} on {d.joint!r}")
 
 
 def set_envelope(model: mujoco.MjModel, actuator: DriveRef, envelope: PerformanceEnvelope | str) -> None:

@@ -22,6 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from drive_envelope._src.format import first_few
+
 if TYPE_CHECKING:
     import mujoco
 
@@ -90,11 +92,6 @@ def _unit(joint_type: str) -> str:
     return "N*m" if joint_type == "revolute" else "N"
 
 
-def _names(joints: Sequence[str]) -> str:
-    shown = ", ".join(joints[:4])
-    return shown + (f" and {len(joints) - 4} more" if len(joints) > 4 else "")
-
-
 def rating_lines(groups: dict[str, list[tuple[str, float, str]]], ratings: dict[str, Rating]) -> list[str]:
     """One line per group whose cap is more than :data:`DISAGREEMENT` below the model's own rating.
 
@@ -119,7 +116,7 @@ def rating_lines(groups: dict[str, list[tuple[str, float, str]]], ratings: dict[
             by_rating.setdefault((rating.effort, rating.source), []).append(joint)
         cap, unit = low[0][1], _unit(low[0][2])
         parts = [
-            f"{effort:g} {unit} ({label}) on {_names(joints)}"
+            f"{effort:g} {unit} ({label}) on {first_few(joints, 4, str)}"
             for (effort, label), joints in by_rating.items()
         ]
         worst = max(1.0 - cap / ratings[j].effort for j, _, _ in low)
@@ -148,9 +145,9 @@ def binding_force_ranges(
         unit = _unit(kind)
         frc = min(ratings[j].frcrange for j, _, _ in tight)
         lines.append(
-            f"{where}: actuatorfrcrange {frc:g} {unit} on {_names([j for j, _, _ in tight])} is below the "
-            f"envelope's max_effort {cap:g} {unit}: MuJoCo clips the drive's effort after the envelope "
-            "(lower max_effort to it, or remove actuatorfrcrange)"
+            f"{where}: actuatorfrcrange {frc:g} {unit} on {first_few([j for j, _, _ in tight], 4, str)} "
+            f"is below the envelope's max_effort {cap:g} {unit}: MuJoCo clips the drive's effort after the "
+            "envelope (lower max_effort to it, or remove actuatorfrcrange)"
         )
     return lines
 

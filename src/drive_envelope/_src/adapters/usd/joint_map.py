@@ -52,6 +52,7 @@ from typing import Any
 
 from drive_envelope._src.envelope.model import ENVELOPE_FIELDS, PerformanceEnvelope, envelope_from_mapping
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.format import first_few
 from drive_envelope._src.validation import nearest_key  # keyed_error: re-exported for apply
 
 _FILE_SUFFIXES = (".toml", ".json", ".yaml", ".yml")
@@ -253,8 +254,7 @@ def _subject(pattern: str, joint: str) -> str:
 
 def _names(joints: Sequence[str], show: Callable[[str], str] = repr) -> str:
     """The first few ``joints`` (each written by ``show``) and how many more there are."""
-    shown = ", ".join(show(joint) for joint in joints[:_SHOWN])
-    return shown + (f" and {len(joints) - _SHOWN} more" if len(joints) > _SHOWN else "")
+    return first_few(joints, _SHOWN, show)
 
 
 def glob_hint(pattern: str) -> str:
