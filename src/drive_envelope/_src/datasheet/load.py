@@ -156,7 +156,7 @@ def datasheet_from_mapping(
         losses=LossesSpec(**sections["losses"]) if "losses" in sections else None,
         output=OutputRating(**sections["output"]) if "output" in sections else None,
         screw=ScrewSpec(**sections["screw"]) if "screw" in sections else None,
-        description=_text(merged, "description", source),
+        description=read_text(merged, "description", source),
         sources=_sources(merged, source),
         source=source,
         provenance=provenance,
@@ -270,7 +270,8 @@ def _check_top_level(data: Mapping[str, Any], source: str) -> None:
         raise InputError(f"{source}: unknown key or section {key!r}{hint}; valid: {', '.join(_TOP_KEYS)}")
 
 
-def _text(data: Mapping[str, Any], key: str, source: str) -> str:
+def read_text(data: Mapping[str, Any], key: str, source: str) -> str:
+    """A string value (empty when absent), for datasheets and scenarios alike."""
     value = data.get(key, "")
     if not isinstance(value, str):
         raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")

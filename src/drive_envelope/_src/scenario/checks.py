@@ -10,6 +10,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from drive_envelope._src.datasheet.load import read_text as read_text  # re-exported for spec, chain
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.values import read_quantity
 
@@ -51,14 +52,6 @@ def table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
     if not isinstance(value, Mapping):
         raise InputError(f"{source}: key {name!r}: expected a table [{name}], got {value!r}")
     return dict(value)
-
-
-def read_text(data: Mapping[str, Any], key: str, source: str) -> str:
-    """A string value (empty when absent)."""
-    value = data.get(key, "")
-    if not isinstance(value, str):
-        raise InputError(f"{source}: key {key!r}: expected a string, got {value!r}")
-    return value
 
 
 def choice(data: Mapping[str, Any], section: str, key: str, choices: tuple[str, ...], source: str) -> str:
