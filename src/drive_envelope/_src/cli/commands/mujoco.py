@@ -95,17 +95,6 @@ def _check_arguments(args: argparse.Namespace) -> None:
         raise InputError(f"--output {output!r} is ROBOT.xml itself: write a new file")
 
 
-def _map_file(name: str) -> str:
-    """A map file, or the file of the shipped robot map ``name``."""
-    from pathlib import Path
-
-    if Path(name).is_file() or Path(name).suffix or "/" in name:
-        return name
-    from drive_envelope._src.datasheet.maps import robot_map_path
-
-    return str(robot_map_path(name))
-
-
 def _assignments(args: argparse.Namespace, spec: Any) -> list[Any]:
     from drive_envelope._src.adapters.mujoco.mjcf import Assignment, driven_joints
     from drive_envelope._src.adapters.usd.joint_map import match_joints, read_map, resolve_envelopes
@@ -113,7 +102,7 @@ def _assignments(args: argparse.Namespace, spec: Any) -> list[Any]:
 
     if args.map is None:
         return [Assignment(joint=args.joint, envelope=joint_envelope(args), where="--joint")]
-    joint_map = read_map(_map_file(args.map))
+    joint_map = read_map(args.map)  # a file, or a shipped robot map's name
     match = match_joints(joint_map, driven_joints(spec))
     for message in match.warnings:
         warn(message)
