@@ -397,3 +397,18 @@ def test_check_mapping_values_share_the_map_reader(tmp_path: Path) -> None:
     bad = _write(tmp_path, "bad.toml", '[joints]\nknee = { envelope = "big.toml", max_effort = 3.0 }\n')
     with pytest.raises(InputError, match=r"key 'joints\.knee': key 'envelope' with inline envelope key"):
         load_joint_mapping(bad)
+
+
+def test_check_samples_refuses_swapped_or_missing_arguments_in_one_line() -> None:
+    """The samples given first, or None for a column, are named (they were a TypeError and a shape error)."""
+    from drive_envelope import InputError
+
+    env = PerformanceEnvelope(max_effort=10.0, max_actuator_velocity=5.0)
+    samples = np.zeros(3)
+    with pytest.raises(
+        InputError, match=r"^check_samples: argument 'envelope': expected a PerformanceEnvelope"
+    ):
+        check_samples(samples, env, samples)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"^check_samples: velocity: expected numbers .*, got None$"):
+        check_samples(env, None, samples)  # type: ignore[arg-type]
+    assert check_samples(env, samples, samples).samples == 3

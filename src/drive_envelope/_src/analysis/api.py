@@ -26,8 +26,9 @@ from drive_envelope._src.analysis.logs import (
 )
 from drive_envelope._src.analysis.mapping import JointMapping, is_mapping_file, load_joint_mapping
 from drive_envelope._src.datasheet.resolve import resolve_envelope
-from drive_envelope._src.envelope.model import PerformanceEnvelope
+from drive_envelope._src.envelope.model import PerformanceEnvelope, require_envelope
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.validation import check_numbers
 
 EnvelopeSource = (
     PerformanceEnvelope | JointMapping | Mapping[str, PerformanceEnvelope] | str | os.PathLike[str]
@@ -109,6 +110,11 @@ def check_samples(
         time: Sample times [s], optional (needed for times on limits and of violations).
         options: Thresholds.
     """
+    if isinstance(envelope, (np.ndarray, list, tuple, float, int)):  # the samples given first
+        require_envelope(envelope, "check_samples")
+    check_numbers(
+        "check_samples", velocity=velocity, effort=effort, **({} if time is None else {"time": time})
+    )
     table: dict[str, npt.ArrayLike] = {"velocity": velocity, "effort": effort}
     if time is not None:
         table["time"] = time
