@@ -249,13 +249,14 @@ def clamp_drive_impulse(
     return np.asarray(result, dtype=kind)  # a 0-d array, not a NumPy scalar, for scalar arguments
 
 
-_BLOCK = 65536
+_BLOCK = 32768
 """Elements per block of a large clamp (``_clamp_blocks``).
 
-The clamp is some sixty array passes; on a million DOFs each pass streams its operands through
+The clamp is some fifty array passes; on a million DOFs each pass streams its operands through
 memory, on blocks of this size they stay in the cache: 2.7x faster at N = 1e6 float64 (16 ms
 against 44 ms, thread CPU time, 2-core EPYC). Smaller blocks pay the per-call overhead of the
-passes (8192: 21 ms), larger ones leave the cache (262144: 28 ms).
+passes (8192: 21 ms; 16384: 1.25x this size's time), larger ones leave a 512 KiB L2 cache (65536:
+1.04-1.09x, 131072: 1.4x, 262144: 28 ms; interleaved, same process).
 """
 
 
