@@ -17,7 +17,8 @@ fail today; their number is held by a ratchet (``KNOWN_BROKEN_BLOCKS``) that onl
 first (a snippet that goes on from the last one); ``<!-- docs-test: venv .venv-mjlab -->`` runs
 it with that environment's python (skipped while that environment is not created, as the mjlab
 tests are). A command that reads ``../shared/`` is skipped when the shared data is absent, as
-the data tests are.
+the data tests are, and so is every snippet after it on that page (they go on from what it made:
+``cp ../shared/...`` then a command on the copy).
 
 Each page is one test; its failure lists every failing snippet as ``file:line``.
 """
@@ -202,8 +203,12 @@ def run_page(page: str, tmp_path: Path) -> tuple[list[str], list[str]]:
     failures: list[str] = []
     skips: list[str] = []
     previous_python: Snippet | None = None
+    shared_skipped = False  # what follows a skipped ../shared command may read what it would have made
     for snippet in snippets(main, page):
         where = f"{page}:{snippet.line}"
+        if shared_skipped:
+            skips.append(f"{where}: skipped (follows a command that needs ../shared/data, absent)")
+            continue
         skip = [m.split(None, 1)[1] for m in snippet.markers if m.startswith("skip ")]
         bad = [reason for reason in skip if reason not in SKIP_REASONS]
         if bad:
@@ -215,10 +220,14 @@ def run_page(page: str, tmp_path: Path) -> tuple[list[str], list[str]]:
             continue
         if snippet.lang == "python":
             failures += _run_python(snippet, previous_python, main, skips)
+            shared_skipped = "../shared/" in _python_code(snippet, previous_python) and not SHARED.is_dir()
             previous_python = snippet
             continue
         for number, command in shell_commands(snippet):
             spot = f"{page}:{number}"
+            if shared_skipped:
+                skips.append(f"{spot}: skipped (follows a command that needs ../shared/data, absent)")
+                continue
             head = command.split("#", 1)[0].strip()
             if re.fullmatch(r"make (demo|test)", head):
                 continue  # the README's set-up commands: `make test` runs this test
@@ -229,6 +238,7 @@ def run_page(page: str, tmp_path: Path) -> tuple[list[str], list[str]]:
                 continue
             if "../shared/" in command and not SHARED.is_dir():
                 skips.append(f"{spot}: skipped (../shared/data is absent)")
+                shared_skipped = True
                 continue
             run = _run(["bash", "-c", command], main)
             expected = _expected_status(command)
@@ -241,11 +251,9 @@ def run_page(page: str, tmp_path: Path) -> tuple[list[str], list[str]]:
 
 def _run_python(snippet: Snippet, previous: Snippet | None, main: Path, skips: list[str]) -> list[str]:
     where = f"{snippet.page}:{snippet.line}"
-    code = "\n".join(text for _, text in snippet.body)
-    if "continues" in snippet.markers:
-        if previous is None:
-            return [f"{where}: marked 'continues' but no python block comes before it"]
-        code = "\n".join(text for _, text in previous.body) + "\n" + code
+    if "continues" in snippet.markers and previous is None:
+        return [f"{where}: marked 'continues' but no python block comes before it"]
+    code = _python_code(snippet, previous)
     python = sys.executable
     venvs = [m.split(None, 1)[1] for m in snippet.markers if m.startswith("venv ")]
     if venvs:
@@ -261,6 +269,14 @@ def _run_python(snippet: Snippet, previous: Snippet | None, main: Path, skips: l
     if run.returncode != 0:
         return [f"{where}: python block exited {run.returncode}: {_tail(run)}"]
     return []
+
+
+def _python_code(snippet: Snippet, previous: Snippet | None) -> str:
+    """The script a python block runs: the block, after the previous one when it ``continues``."""
+    code = "\n".join(text for _, text in snippet.body)
+    if "continues" in snippet.markers and previous is not None:
+        code = "\n".join(text for _, text in previous.body) + "\n" + code
+    return code
 
 
 @pytest.mark.parametrize("page", _pages())
@@ -308,3 +324,20 @@ def test_known_broken_blocks_only_go_down() -> None:
     assert len(marked) == KNOWN_BROKEN_BLOCKS, (
         f"only {len(marked)} blocks are marked 'skip broken' now: lower KNOWN_BROKEN_BLOCKS to {len(marked)}"
     )
+
+
+def test_what_follows_an_absent_shared_command_is_skipped(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a fresh clone without ../shared: `cp ../shared/...` is skipped, and so is the command on the copy
+    page = tmp_path / "page.md"
+    page.write_text(
+        "```sh\necho first\ncp ../shared/data/robot.usda .\ncat robot.usda\n```\n"
+        "```sh\ncat robot.usda\n```\n",
+        encoding="utf-8",
+    )
+    monkeypatch.setattr(sys.modules[__name__], "SHARED", tmp_path / "no-shared")
+    monkeypatch.setattr(sys.modules[__name__], "_fresh_checkout", lambda _: tmp_path)
+    failures, skips = run_page("page.md", tmp_path)
+    assert failures == []
+    assert [line.split(":")[1] for line in skips] == ["3", "4", "6"]
