@@ -108,6 +108,12 @@ EXPECTED: dict[str, Expected] = {
     "unitree-h1-knee": caps(300, 14),  # left_knee_joint effort="300" velocity="14"
     "unitree-h1-ankle": caps(40, 9),  # left_ankle_joint effort="40" velocity="9"
     "unitree-h1-arm": caps(18, 20),  # left_elbow_joint effort="18" velocity="20"
+    # Kinova ros_kortex gen3_macro.xacro (7dof): <limit effort=... velocity=...>
+    "kinova-gen3-large": caps(39, 1.3963),  # joint_1..4 effort="39" velocity="1.3963"
+    "kinova-gen3-small": caps(9, 1.2218),  # joint_5..7 effort="9" velocity="1.2218"
+    # Isaac Lab anymal.py ANYDRIVE_3 DCMotorCfg: cap effort_limit=80.0 on the line from
+    # saturation_effort=120.0 at rest to velocity_limit=7.5 at zero effort: gradient 7.5 / 120
+    "anybotics-anydrive-3": Expected(80, 7.5, 7.5 / 120, "output_rating", "output_no_load"),
     # FEETECH model pages: "Peak stall torque", "No load speed" (time per 60 degrees)
     "feetech-sts3215-c001": servo(19.5 * KGF_CM, SIXTY_DEG / 0.238),  # "19.5kg.cm@6V", "0.238sec/60°@6V"
     "feetech-st3215-c018": servo(30 * KGF_CM, SIXTY_DEG / 0.222),  # "30kg.cm@12V", "0.222sec/60°@12V"

@@ -1,11 +1,13 @@
 """Catalog entries from machine-readable vendor files against a transcription of each element (issue 23).
 
-Every entry whose source is a vendor's machine-readable file (a URDF, a xacro, ROBOTIS' e-Manual data
-file) must name the file at a pinned revision and the element, and its numbers must be the element's.
-The element texts below were copied from the files at the revisions named (read on 2026-12-02 from
-unitreerobotics/unitree_ros @ d6f13aad and ROBOTIS-GIT/emanual @ 00280385 and @ 1a5e5fbe); fetched
-files are not committed, so the transcription lives here. The numbers are read back from the quoted
-text with the library's own unit reader, and compared with what the catalog entry derives.
+Every entry whose source is a machine-readable file (a URDF, a xacro, ROBOTIS' e-Manual data file, a
+Python config module such as Isaac Lab's actuator configs) must name the file at a pinned revision and
+the element, and its numbers must be the element's. The element texts below were copied from the files
+at the revisions named (read on 2026-12-02 from unitreerobotics/unitree_ros @ d6f13aad and
+ROBOTIS-GIT/emanual @ 00280385 and @ 1a5e5fbe, on 2026-12-03 from Kinovarobotics/ros_kortex @ 5fce8b7a
+and isaac-sim/IsaacLab @ f0ca71b4); fetched files are not committed, so the transcription lives here.
+The numbers are read back from the quoted text with the library's own unit reader, and compared with
+what the catalog entry derives.
 """
 
 from __future__ import annotations
@@ -26,6 +28,14 @@ UNITREE = (
 )
 DXL_X = "https://github.com/ROBOTIS-GIT/emanual/blob/00280385680aba081862d0854c95de523c6391e6/_data/dxl_x_info.yml"
 DXL_P = "https://github.com/ROBOTIS-GIT/emanual/blob/1a5e5fbeb6c41e261a1c67ba74e1cb3ec728072e/_data/dxl_p_info.yml"
+KORTEX_GEN3 = (
+    "https://github.com/Kinovarobotics/ros_kortex/blob/5fce8b7ab9b957834696d02c725f44efc931392b/"
+    "kortex_description/arms/gen3/7dof/urdf/gen3_macro.xacro"
+)
+ISAACLAB_ANYMAL = (
+    "https://github.com/isaac-sim/IsaacLab/blob/f0ca71b4aa58c3d4284b0ca39500762fbda5d3dd/"
+    "source/isaaclab_assets/isaaclab_assets/robots/anymal.py"
+)
 
 
 class Element(NamedTuple):
@@ -103,6 +113,27 @@ TRANSCRIPTION: dict[str, Element] = {
         '<xacro:property name="hip_velocity_max" value="30.1"/> '
         '<xacro:property name="hip_torque_max" value="23.7"/>',
     ),
+    # Kinova's Gen3 xacro: the joints are named "${prefix}joint_N"; joint_2 and joint_6 print their limit on
+    # one line (joint_1, 3, 4 and 5, 7 print the same effort and velocity)
+    "kinova-gen3-large": Element(
+        KORTEX_GEN3,
+        "${prefix}joint_2",
+        '<limit lower="-2.41" upper="2.41" effort="39" velocity="1.3963" />',
+    ),
+    "kinova-gen3-small": Element(
+        KORTEX_GEN3,
+        "${prefix}joint_6",
+        '<limit lower="-2.23" upper="2.23" effort="9" velocity="1.2218" />',
+    ),
+    # Isaac Lab's ANYdrive 3 DC motor config (NVIDIA's actuator model, SI joint units)
+    "anybotics-anydrive-3": Element(
+        ISAACLAB_ANYMAL,
+        "ANYDRIVE_3_SIMPLE_ACTUATOR_CFG",
+        "ANYDRIVE_3_SIMPLE_ACTUATOR_CFG = DCMotorCfg("
+        ' joint_names_expr=[".*HAA", ".*HFE", ".*KFE"],'
+        " saturation_effort=120.0, effort_limit=80.0, velocity_limit=7.5,"
+        ' stiffness={".*": 40.0}, damping={".*": 5.0}, )',
+    ),
     # ROBOTIS: the bold (recommended-voltage) entry of each multi-voltage line, or the one at 12 V
     "dynamixel-xl330-m077": dxl(
         "xl330-m077", "0.215 [N.m] (at 5.0 [V], 1.47 [A])", "383 [rev/min] (at 5.0 [V])"
@@ -165,6 +196,11 @@ def _numbers(element: Element) -> tuple[float, float]:
         return to_si(f"{effort.group(1)} N*m", "N*m", "urdf"), to_si(
             f"{speed.group(1)} rad/s", "rad/s", "urdf"
         )
+    if "DCMotorCfg(" in text:  # Isaac Lab, SI joint units: effort_limit caps, velocity_limit is no-load
+        effort = re.search(r"effort_limit=([\d.]+)", text)
+        speed = re.search(r"velocity_limit=([\d.]+)", text)
+        assert effort and speed
+        return float(effort.group(1)), float(speed.group(1))
     if text.startswith("<xacro"):
         torque = re.search(r'name="\w+_torque_max" value="([^"]+)"', text)
         speed = re.search(r'name="\w+_velocity_max" value="([^"]+)"', text)
@@ -184,7 +220,7 @@ def _numbers(element: Element) -> tuple[float, float]:
 
 def _machine_readable(path: Path) -> bool:
     text = path.read_text(encoding="utf-8")
-    return bool(re.search(r"sources = \[?[^\]]*(\.urdf|\.xacro|\.yml)\"", text, re.DOTALL))
+    return bool(re.search(r"sources = \[?[^\]]*(\.urdf|\.xacro|\.yml|\.py)\"", text, re.DOTALL))
 
 
 def test_every_machine_readable_entry_is_transcribed() -> None:
@@ -217,3 +253,19 @@ def test_dynamixel_p_gradient_is_the_line_through_its_continuous_point(name: str
     )
     env = derive(load_catalog_datasheet(name)).envelope
     assert env.speed_effort_gradient == pytest.approx((no_load - cont_speed) / torque, rel=1e-12)
+
+
+def test_isaac_lab_dc_motor_is_the_line_from_saturation_to_velocity_limit() -> None:
+    """DCMotor: effort from saturation_effort at rest to 0 at velocity_limit, capped at effort_limit."""
+    text = TRANSCRIPTION["anybotics-anydrive-3"].text
+    keys = ("saturation_effort", "effort_limit", "velocity_limit")
+    found = [re.search(rf"{key}=([\d.]+)", text) for key in keys]
+    saturation, limit, speed = (float(m.group(1)) for m in found if m)
+    d = derive(load_catalog_datasheet("anybotics-anydrive-3"))
+    env = d.envelope
+    assert env.speed_effort_gradient == pytest.approx(speed / saturation, rel=1e-12)
+    assert d.max_effort_limited_by == "output_rating"
+    assert d.max_actuator_velocity_limited_by == "output_no_load"
+    # Isaac Lab's corner, where saturation * (1 - v / velocity_limit) meets effort_limit
+    corner = speed * (1.0 - limit / saturation)
+    assert env.max_actuator_velocity - env.speed_effort_gradient * env.max_effort == pytest.approx(corner)

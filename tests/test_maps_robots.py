@@ -1,11 +1,12 @@
 """The shipped robot maps against the joint names of the robots' published models.
 
-Joint names come from the real models where ../shared/data has them (MuJoCo Menagerie's go2.xml and
-panda.xml, read with a small MJCF parser here; Newton's FR3 USD asset, read as text), and are typed
-from the vendor's model otherwise (G1, SO-101), citing the file. The rule tested is the map format's:
-a pattern without "/" is an fnmatchcase glob on the joint's own name (the part after the last "/"
-of a USD prim path); each pattern must match at least one joint and no joint may match two
-patterns. Every value must resolve to an envelope, and the envelope must be the catalog entry's.
+Joint names come from the real models where ../shared/data has them (MuJoCo Menagerie's go2.xml,
+panda.xml, kinova_gen3/gen3.xml and anybotics_anymal_c/anymal_c.xml, read with a small MJCF parser
+here; Newton's FR3 USD asset, read as text), and are typed from the vendor's model otherwise (G1,
+SO-101), citing the file. The rule tested is the map format's: a pattern without "/" is an
+fnmatchcase glob on the joint's own name (the part after the last "/" of a USD prim path); each
+pattern must match at least one joint and no joint may match two patterns. Every value must resolve
+to an envelope, and the envelope must be the catalog entry's.
 """
 
 from __future__ import annotations
@@ -157,6 +158,29 @@ def test_g1_map_covers_the_29_dof_model() -> None:
     assert assigned["waist_pitch_joint"] == "unitree-g1-ankle"
 
 
+def test_gen3_map_covers_the_menagerie_arm() -> None:
+    """Menagerie kinova_gen3/gen3.xml: joint_1..7, large actuators on 1-4, small on 5-7."""
+    joints = mjcf_joint_names(need(SHARED / "menagerie" / "kinova_gen3" / "gen3.xml"))
+    assert joints == [f"joint_{i}" for i in range(1, 8)]
+    assigned = check_map("kinova-gen3", joints)
+    assert set(assigned) == set(joints)
+    assert [assigned[f"joint_{i}"] for i in (1, 4, 5, 7)] == [
+        "kinova-gen3-large",
+        "kinova-gen3-large",
+        "kinova-gen3-small",
+        "kinova-gen3-small",
+    ]
+
+
+def test_anymal_c_map_covers_the_menagerie_quadruped() -> None:
+    """Menagerie anybotics_anymal_c/anymal_c.xml: 12 leg joints (the free joint aside), all ANYdrive 3."""
+    joints = mjcf_joint_names(need(SHARED / "menagerie" / "anybotics_anymal_c" / "anymal_c.xml"))
+    assert len(joints) == 12
+    assigned = check_map("anybotics-anymal-c", joints)
+    assert set(assigned) == set(joints)
+    assert set(assigned.values()) == {"anybotics-anydrive-3"}
+
+
 @pytest.mark.parametrize("key", ["so101", "so101-12v"])
 def test_so101_maps_cover_the_six_joints(key: str) -> None:
     """SO-101: the six joints of so101_new_calib.xml, all one servo model."""
@@ -183,7 +207,10 @@ def test_map_listing_and_lookup() -> None:
     """robot_maps lists every file with its robot; robot_map_path finds one by key or file name."""
     listed = {m.key: m for m in robot_maps()}
     assert {"unitree-go2", "unitree-g1", "so101", "franka-panda", "franka-fr3"} <= set(listed)
+    assert {"kinova-gen3", "anybotics-anymal-c"} <= set(listed)
     assert listed["unitree-go2"].title.startswith("Unitree Go2")
+    assert listed["kinova-gen3"].title == "Kinova Gen3 arm (7 DoF)"
+    assert listed["anybotics-anymal-c"].title == "ANYbotics ANYmal C quadruped"
     assert robot_map_path("unitree-go2") == robot_map_path("unitree-go2.toml") == MAPS / "unitree-go2.toml"
 
 
