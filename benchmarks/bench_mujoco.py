@@ -23,14 +23,34 @@ still depends on the forces). A third line drops the constraints altogether: the
 kinds there is their actuation cost alone. A fourth line lets each kind run its own motion (its own
 contacts).
 
-``--robot g1``: the Menagerie G1 (29 DOF, on the floor; ``../shared/data/menagerie/unitree_g1``)
-with the ``unitree-g1`` map's drives on the model's own gains, against its own ``position``
-actuators (goal <= 1.10x, issue 28).
+``--robot g1|gen3|anymal-c``: a Menagerie robot (``ROBOTS``: ``../shared/data/menagerie/unitree_g1``,
+``kinova_gen3``, ``anybotics_anymal_c``) with its shipped map's drives (``unitree-g1``, ``kinova-gen3``,
+``anybotics-anymal-c``) in place of its own ``position`` actuators, on the model's own kp and kv (the
+compiled ones: ``mujoco apply --map`` without gains), against those actuators as the model ships them
+(issue 28's goals: plugin/position <= 1.10x on the G1, 1.05x on Gen3 and ANYmal C). Every joint
+follows its start keyframe plus a sine, phases spread (one radian apart):
+
+* G1 on the floor: keyframe ``stand``, 0.3 rad at 6 rad/s from the first step (29 hinges; it falls);
+* Kinova Gen3 (fixed base, implicitfast): keyframe ``home``, 0.3 rad at 4 rad/s ramped in over
+  0.5 s. Kinova's caps (39 / 9 N*m, 1.3963 / 1.2218 rad/s) are far below the model's forcerange (105 /
+  52 N*m); a target faster than the speed cap, or a jump at the first step, takes a joint past it,
+  where the drive lets go (zero effort) and the arm drops. Menagerie's base_link and shoulder_link
+  meshes overlap at rest (4 contacts), so joint 1 grinds on its base and is the drive that saturates
+  (about 10 % of the steps); the other joints follow their targets inside their envelopes;
+* ANYmal C on the floor (Euler, elliptic cones): the keyframe ``standing`` of Menagerie's
+  anymal_c_mjx.xml (anymal_c.xml has none; added here), 0.3 rad at 10 rad/s ramped in over 0.5 s:
+  up to 3 rad/s, past the ANYdrive's 2.5 rad/s corner, so 11 of the 12 drives reach their envelope
+  (about 40 % of the steps have one there); it stays on its feet (base 0.56 -> 0.42 m in 3 s). The
+  model's actuators are kp 100, kv 0 with forcerange 80 N*m, the drives the same gains and 80 N*m on
+  the line to 7.5 rad/s.
+
+The output has three lines: same states, same states without constraints, own motion.
 
 ``--solver pgs|tgs`` (with ``--iterations P V``) runs the plugin's drives as PhysX's articulation
 iterates them (``drive_envelope.mujoco.set_solver``) instead of the exact coupled solve.
 
-    .venv/bin/python benchmarks/bench_mujoco.py [--blocks 31] [--states 1500] [--solver tgs --iterations 4 1]
+    .venv/bin/python benchmarks/bench_mujoco.py [--robot go2|g1|gen3|anymal-c] [--blocks 31] [--states 1500]
+        [--solver tgs --iterations 4 1]
 """
 
 from __future__ import annotations
@@ -39,18 +59,88 @@ import argparse
 import statistics
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-GO2 = ROOT.parent / "shared" / "data" / "menagerie" / "scene_floor.xml"
-G1 = ROOT.parent / "shared" / "data" / "menagerie" / "unitree_g1" / "scene.xml"
-G1_GOAL = 1.10  # issue 28: the plugin within 1.10x the G1's own position actuators
+MENAGERIE = ROOT.parent / "shared" / "data" / "menagerie"
+GO2 = MENAGERIE / "scene_floor.xml"
 KINDS = ("plugin", "position", "dcmotor")
 KP, KV = 60.0, 2.0
 HOME = np.array([0.0, 0.9, -1.8] * 4)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Robot:
+    """One Menagerie robot of ``--robot``: its scene, its shipped map, the goal and the motion."""
+
+    label: str
+    """Name in the output."""
+    scene: Path
+    """The scene file (robot and floor)."""
+    joint_map: str
+    """The shipped map (``drive-envelope catalog --maps``) whose drives replace its actuators."""
+    goal: float
+    """Issue 28's goal for plugin / position [1]."""
+    nu: int
+    """Its actuators, all position actuators on hinges."""
+    keyframe: str
+    """The keyframe of the start pose, also the centre of the targets."""
+    amplitude: float
+    """Target amplitude about the start pose [rad]."""
+    rate: float
+    """Target angular frequency [rad/s]."""
+    ramp: float = 0.0
+    """Time over which the amplitude rises from 0, linearly [s]; 0: the waves start at full amplitude."""
+    key_qpos: tuple[float, ...] | None = None
+    """The start pose's qpos, added as ``keyframe`` when the scene file has no keyframe."""
+
+
+# Menagerie's anymal_c_mjx.xml keyframe "standing" ("A higher standing position"); anymal_c.xml has none
+ANYMAL_STANDING = (
+    0.0, 0.0, 0.56, 1.0, 0.0, 0.0, 0.0,
+    0.0, 0.5235987755982988, -0.7853981, 0.0, 0.5235987755982988, -0.7853981,
+    0.0, -0.5235987755982988, 0.7853981, 0.0, -0.5235987755982988, 0.7853981,
+)  # fmt: skip
+ROBOTS = {
+    # issue 28's goals: the plugin within 1.10x the G1's own position actuators, 1.05x Gen3's and ANYmal C's
+    "g1": Robot(
+        label="Menagerie G1 on a floor",
+        scene=MENAGERIE / "unitree_g1" / "scene.xml",
+        joint_map="unitree-g1",
+        goal=1.10,
+        nu=29,
+        keyframe="stand",
+        amplitude=0.3,
+        rate=6.0,
+    ),
+    "gen3": Robot(
+        label="Menagerie Kinova Gen3",
+        scene=MENAGERIE / "kinova_gen3" / "scene.xml",
+        joint_map="kinova-gen3",
+        goal=1.05,
+        nu=7,
+        keyframe="home",
+        amplitude=0.3,
+        rate=4.0,  # 1.2 rad/s at most, below the small actuators' 1.2218: above it the drive lets go
+        ramp=0.5,
+    ),
+    "anymal-c": Robot(
+        label="Menagerie ANYmal C on a floor",
+        scene=MENAGERIE / "anybotics_anymal_c" / "scene.xml",
+        joint_map="anybotics-anymal-c",
+        goal=1.05,
+        nu=12,
+        keyframe="standing",
+        amplitude=0.3,
+        rate=10.0,  # 3 rad/s at most: past the ANYdrive's corner (2.5 rad/s), on its speed-torque line
+        ramp=0.5,
+        key_qpos=ANYMAL_STANDING,
+    ),
+}
 
 
 def _envelope(joint: str) -> Any:
@@ -119,11 +209,17 @@ def build(
     return spec.compile(), joints, label
 
 
-def build_g1(kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)) -> Any:
-    """The Menagerie G1 (29 hinges, floor): its own position actuators, or the ``unitree-g1`` map's drives.
+def _add_keyframe(spec: Any, robot: Robot) -> None:
+    """The robot's start pose as a keyframe, where its scene file has none (ANYmal C)."""
+    if robot.key_qpos is not None:
+        spec.add_key(name=robot.keyframe, qpos=list(robot.key_qpos))
+
+
+def build_robot(robot: Robot, kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)) -> Any:
+    """A Menagerie robot: its own position actuators, or its map's drives in their place.
 
     The drives replace each ``position`` actuator in place and keep its kp and kv (``mujoco apply
-    --map unitree-g1`` without gains), so both kinds have the model's own gains.
+    --map <robot's map>`` without gains), so both kinds have the model's own gains.
     """
     import mujoco
 
@@ -132,7 +228,8 @@ def build_g1(kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4,
     from drive_envelope._src.datasheet.maps import robot_map_path
     from drive_envelope.mujoco import set_solver
 
-    spec = load_spec(G1)
+    spec = load_spec(robot.scene)
+    _add_keyframe(spec, robot)
     if kind == "plugin":
         # dampratio="1" positions: write each compiled kv (and kp) so the drives keep those gains
         compiled = spec.compile()
@@ -140,7 +237,7 @@ def build_g1(kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4,
             index = compiled.actuator(actuator.name).id
             kp, kv = compiled.actuator_gainprm[index, 0], -compiled.actuator_biasprm[index, 2]
             actuator.set_to_position(kp=float(kp), kv=float(kv))
-        match = match_joints(read_map(str(robot_map_path("unitree-g1"))), driven_joints(spec))
+        match = match_joints(read_map(str(robot_map_path(robot.joint_map))), driven_joints(spec))
         items = [
             Assignment(joint=item.joint, envelope=item.envelope, where=item.entry.where)
             for item in resolve_envelopes(match)
@@ -150,39 +247,50 @@ def build_g1(kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4,
         if solver != "exact":
             set_solver(spec, solver, position_iterations=iterations[0], velocity_iterations=iterations[1])
     model = spec.compile()
-    assert model.nu == 29 and all(model.jnt_type[model.actuator_trnid[:, 0]] == mujoco.mjtJoint.mjJNT_HINGE)
+    hinges = model.jnt_type[model.actuator_trnid[:, 0]] == mujoco.mjtJoint.mjJNT_HINGE
+    assert model.nu == robot.nu and all(hinges)
     return model
 
 
-def g1_targets(model: Any, times: np.ndarray) -> np.ndarray:
-    """The stand pose with every joint waving 0.3 rad at 6 rad/s, phases spread; (len(times), 29)."""
-    key = model.key("stand")
+def robot_targets(model: Any, robot: Robot, times: np.ndarray) -> np.ndarray:
+    """The start pose, each joint waving ``robot.amplitude`` at ``robot.rate``, phases spread; (steps, nu)."""
+    key = model.key(robot.keyframe)
     qpos = key.qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]]
     phase = np.arange(model.nu)[None, :]
-    return qpos[None, :] + 0.3 * np.sin(6 * times[:, None] + phase)
+    t = times[:, None]
+    gain = np.minimum(t / robot.ramp, 1.0) if robot.ramp > 0 else 1.0
+    return qpos[None, :] + gain * robot.amplitude * np.sin(robot.rate * t + phase)
 
 
-def _g1_state(model: Any) -> np.ndarray:
+def _robot_state(model: Any, robot: Robot) -> np.ndarray:
     import mujoco
 
     data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
+    mujoco.mj_resetDataKeyframe(model, data, model.key(robot.keyframe).id)
     state = np.zeros(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS))
     mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     return state
 
 
-def main_g1(args: argparse.Namespace) -> int:
-    """The G1 workload: plugin (the map's drives) against the G1's own position actuators."""
+def main_robot(args: argparse.Namespace) -> int:
+    """A Menagerie robot's workload: plugin (its map's drives) against the robot's own position actuators."""
     import mujoco
     from mujoco import rollout
 
-    models = {kind: build_g1(kind, args.solver, tuple(args.iterations)) for kind in ("plugin", "position")}
+    robot = ROBOTS[args.robot]
+    iterations = tuple(args.iterations)
+    models = {kind: build_robot(robot, kind, args.solver, iterations) for kind in ("plugin", "position")}
     times = np.arange(args.states) * models["plugin"].opt.timestep
-    control = g1_targets(models["plugin"], times)
+    control = robot_targets(models["plugin"], robot, times)
     own = {}
     for kind, model in models.items():
-        own[kind] = (model, mujoco.MjData(model), _g1_state(model)[None], control[None], args.states)
+        own[kind] = (
+            model,
+            mujoco.MjData(model),
+            _robot_state(model, robot)[None],
+            control[None],
+            args.states,
+        )
     model, data, state0, _, _ = own["plugin"]
     recorded, _ = rollout.rollout(model, data, state0, control[None])
     same = {}
@@ -190,9 +298,9 @@ def main_g1(args: argparse.Namespace) -> int:
         same[kind] = (m, d, _convert(m, recorded[0], model), control[:, None, :], args.states)
     solver = args.solver if args.solver == "exact" else "{} {}/{}".format(args.solver, *args.iterations)
     print(
-        f"mujoco {mujoco.__version__}, Menagerie G1 on a floor: nv = {model.nv}, 29 hinges "
-        f"(unitree-g1 map, the model's kp/kv), {mujoco.mjtIntegrator(model.opt.integrator).name}, dt = "
-        f"{model.opt.timestep * 1e3:g} ms, {args.blocks} blocks x {args.states} steps, "
+        f"mujoco {mujoco.__version__}, {robot.label}: nv = {model.nv}, {robot.nu} hinges "
+        f"({robot.joint_map} map, the model's kp/kv), {mujoco.mjtIntegrator(model.opt.integrator).name}, "
+        f"dt = {model.opt.timestep * 1e3:g} ms, {args.blocks} blocks x {args.states} steps, "
         f"plugin solver {solver}; median thread CPU time per mj_step:"
     )
     alone = {}
@@ -204,7 +312,7 @@ def main_g1(args: argparse.Namespace) -> int:
         print(
             f"  {name:12s} plugin {median['plugin'] * 1e6:6.2f} us"
             f"   position {median['position'] * 1e6:6.2f} us"
-            f"   plugin/position = {median['plugin'] / median['position']:.3f} (goal <= {G1_GOAL:.2f})"
+            f"   plugin/position = {median['plugin'] / median['position']:.3f} (goal <= {robot.goal:.2f})"
             f"   plugin - native = {(median['plugin'] - median['position']) * 1e6:+.2f} us"
         )
     return 0
@@ -296,13 +404,13 @@ def main() -> int:
     parser.add_argument(
         "--iterations", type=int, nargs=2, default=(4, 1), metavar=("P", "V"), help="pgs/tgs iterations"
     )
-    parser.add_argument("--robot", choices=("go2", "g1"), default="go2", help="workload (default go2)")
+    parser.add_argument("--robot", choices=("go2", *ROBOTS), default="go2", help="workload (default go2)")
     args = parser.parse_args()
-    if args.robot == "g1":
+    if args.robot in ROBOTS:
         from drive_envelope.mujoco import load_plugin
 
         load_plugin()
-        return main_g1(args)
+        return main_robot(args)
 
     import mujoco
     from mujoco import rollout
