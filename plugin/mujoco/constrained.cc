@@ -199,6 +199,7 @@ int CoupledSolver::Constrained(const mjModel* m, mjData* d, double dt) {
     // linearised at the checked efforts: v1 = cv + A_c (x - x_checked); the damping is inside
     // A_c, so the rows carry none of their own, and every drive starts from its checked impulse
     full_ = true;
+    tree_ = false;  // A_c is not M's inverse: the Newton steps take the dense block
     for (int r = 0; r < n; r++) {
       int k = rows_[r].drive;
       bool drive = k >= 0 && request_[k].active;
@@ -216,7 +217,7 @@ int CoupledSolver::Constrained(const mjModel* m, mjData* d, double dt) {
     }
     Prepare(d, dt);
     Velocities();
-    steps += Settle(d, dt);
+    steps += Settle(m, d, dt);
     mju_copy(d->qacc_warmstart, d->qacc, nv);  // the next check starts from this solve's answer
   }
   effort_ = best_effort_;

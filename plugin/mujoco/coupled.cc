@@ -158,7 +158,7 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   force_.assign(m->nv, 0);
   zd_.assign(member_row_.size(), 0);
   a_.assign(n * n, 0);
-  for (auto* v : {&vfree_, &damp_, &qvel_, &x_, &y_, &v_, &w_, &lin_c_, &lin_alpha_, &rhs_, &sol_}) {
+  for (auto* v : {&vfree_, &damp_, &qvel_, &x_, &y_, &v_, &w_, &lin_c_, &lin_alpha_, &rhs_, &step_c_, &step_alpha_}) {
     v->assign(n, 0);
   }
   q_.assign(n * n, 0);
@@ -183,6 +183,18 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   hdinv_.assign(m->nv, 0);
   delta_.assign(m->nv, 0);
   bias_force_.assign(m->nv, 0);
+  row_force_.assign(m->nv, 0);
+  lawful_.assign(n, 0);
+  changed_.reserve(n);
+  guess_dv_.assign(m->nv, 0);
+  dv_.assign(m->nv, 0);
+  zc_.assign(static_cast<size_t>(n) * m->nv, 0);
+  for (int k = 0; k < m->nv; k++) {
+    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+      factor_work_ += m->M_rownnz[m->M_colind[adr]];
+    }
+  }
+  solve_work_ = 2 * (m->nC - m->nv) + m->nv;
   warned_.assign(drives_.size() + 2, 0);
 }
 
@@ -354,6 +366,7 @@ void CoupledSolver::Response(const mjModel* m, const mjData* d) {
     for (int i = 0; i < member_num_[k]; i++) adiag_[rows[i]] += z[i] * dinv[k] * z[i];
   }
   full_ = false;
+  tree_ = true;
 }
 
 void CoupledSolver::FullResponse(const mjData* d) {

@@ -90,13 +90,21 @@ class CoupledSolver {
   void HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const;
   void RowsOf(const mjData* d, const mjtNum* half, double* out) const;
   void Prepare(const mjData* d, double dt);
+  bool TreeSolve(const mjModel* m, const mjData* d, const mjtNum* c, const mjtNum* alpha);
+  bool TreeFactor(const mjModel* m, const mjData* d, const mjtNum* alpha);
+  void TreeBack(const mjModel* m, mjtNum* x) const;
+  bool TreeUpdate(const mjModel* m);
+  void TreeVelocities(const mjModel* m, const mjData* d);
   void LinearGuess(const mjModel* m, const mjData* d);
   RowResult RowSolve(int r, double rest, double dt, const mjData* d);
   void Track(int r, const RowResult& result);
   void Velocities();
-  bool Newton(const mjData* d, double dt, int* iterations);
+  bool Newton(const mjModel* m, const mjData* d, double dt, int* iterations);
+  void Slopes(const mjData* d, double dt);
+  bool TreeStep(const mjModel* m, const mjData* d);
+  bool DenseStep(const mjData* d);
   int Sweep(const mjModel* m, const mjData* d, double dt);
-  int Settle(const mjData* d, double dt);
+  int Settle(const mjModel* m, const mjData* d, double dt);
 
   // constraints=1 (constrained.cc): Newton steps on the drives with MuJoCo's constraint solve in
   // the loop, each linearised with the constrained Hessian M + h*D' + J'*D*J; returns the steps
@@ -113,10 +121,9 @@ class CoupledSolver {
   void Propagate(int r, double impulse);
   void BiasVelocity(const mjModel* m, mjData* d, double dt);
 
-  int solver_numeric_ = -1;
-
   std::vector<Drive> drives_;
   std::vector<int> native_;
+  int solver_numeric_ = -1;
   std::vector<Row> rows_;
   int nrow_ = 0;
   int solves_ = 0;
@@ -133,7 +140,14 @@ class CoupledSolver {
   std::vector<Request> request_;
   std::vector<mjtNum> force_, zd_;
   std::vector<double> a_, vfree_, damp_, qvel_, x_, y_, v_, effort_;
-  std::vector<mjtNum> w_, lin_c_, lin_alpha_, q_, rhs_, sol_;
+  std::vector<mjtNum> w_, lin_c_, lin_alpha_, q_, rhs_;
+  std::vector<mjtNum> step_c_, step_alpha_;  // Newton: each row's law of the step (TreeStep)
+  std::vector<char> lawful_;             // per row: its step law is the linear guess's (Slopes)
+  std::vector<int> changed_;             // the rows whose law is not (TreeStep)
+  bool guess_factored_ = false;          // h_ holds the linear guess's factor, guess_dv_ its dv
+  std::vector<mjtNum> guess_dv_, dv_;    // over the dofs
+  std::vector<mjtNum> zc_;               // TreeUpdate: H^-1 on each changed row's unit column
+  int factor_work_ = 0, solve_work_ = 0;  // multiply-adds of TreeFactor and TreeBack
   std::vector<int> free_, fixed_;
   std::vector<char> stale_, warned_;
   std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
@@ -144,12 +158,14 @@ class CoupledSolver {
   std::vector<ImplicitDriveDesc> desc_;  // per row, the step's drive law (pgs/tgs)
   std::vector<double> adiag_;            // per row, A_rr (Response; a_ only after FullResponse)
   bool full_ = false;                    // a_ holds this step's A
+  bool tree_ = true;                     // A = P M^-1 P' (TreeSolve serves), not constrained.cc's
   std::vector<mjtNum> h_, hdinv_, delta_;  // the linear guess's sparse factor and solution
   std::vector<double> moved_;            // per row, displacement since the step began (tgs)
   std::vector<double> shift_;            // per row, PhysX's position minus MuJoCo's [rad or m]
   bool shift_pending_ = false;
   std::vector<double> bias_;             // per row, h*(M^-1 * velocity-dependent bias) (tgs)
   std::vector<mjtNum> bias_force_;       // scratch over the dofs
+  std::vector<mjtNum> row_force_;        // scratch over the dofs (TreeVelocities)
 
   // constraints=1 (constrained.cc)
   bool keep_smooth_ = false;             // SmoothVelocity keeps the smooth force in smooth_

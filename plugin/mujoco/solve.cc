@@ -15,6 +15,10 @@
 namespace drive_envelope::mujoco_plugin {
 namespace {
 
+// TreeStep takes rows with |1 + slope*A_rr| above this (alpha*A_rr below its inverse, 1e4):
+// there the tree solve's velocities match A*w to rounding; below, the dense step
+constexpr double kTreeConditioning = 1e-4;
+
 // whether a total impulse x and the end-of-step velocity v it gives lie inside the envelope by a
 // relative margin of 1e-9: then ClampDriveImpulse would return the request x unchanged
 bool Inside(const DriveParams& p, double dt, double x, double v) {
@@ -124,26 +128,45 @@ void CoupledSolver::Prepare(const mjData* d, double dt) {
   }
 }
 
-void CoupledSolver::LinearGuess(const mjModel* m, const mjData* d) {
-  // the solve's starting point: every row's unclamped law w = c - alpha*v1 at once. With
-  // v1 = vfree + M^-1 P' w that is (M + P' diag(alpha) P) dv = P' (c - alpha*vfree), v1 = vfree + dv
-  // at the rows: M's own sparsity (the tree), factored as MuJoCo factors M (mj_factorI), so no
-  // block of M^-1 is needed. Newton and the sweeps then clamp and correct it, so a failed
-  // factorization only costs iterations: it falls back to one Jacobi step from vfree. The loop is
-  // mj_factorI's own because mujoco.h (4.0) has no call that factors a matrix other than d->M:
-  // mj_factorM writes d->qLD, which the constraint solver reads after the drives
+bool CoupledSolver::TreeSolve(const mjModel* m, const mjData* d, const mjtNum* c, const mjtNum* alpha) {
+  // every row's law w = c - alpha*v1 at once. With v1 = vfree + M^-1 P' w that is
+  // (M + P' diag(alpha) P) dv = P' (c - alpha*vfree), v1 = vfree + dv at the rows: M's own sparsity
+  // (the tree), so no block of M^-1 is needed. Writes w_ and v_ (a row whose numbers are not
+  // finite: w 0, v vfree) and keeps the factor and dv (TreeUpdate); false when the factorization
+  // fails (a pivot not > mjMINVAL: alpha < 0 can make the matrix indefinite) or a row was not finite
   int n = nrow_, nv = m->nv;
-  mjtNum* h = h_.data();
   mjtNum* x = delta_.data();
-  for (int i = 0; i < m->nC; i++) h[i] = d->M[i];
   for (int i = 0; i < nv; i++) x[i] = 0;
+  for (int r = 0; r < n; r++) x[rows_[r].dof] = c[r] - alpha[r] * vfree_[r];
+  bool factored = TreeFactor(m, d, alpha);
+  if (factored) TreeBack(m, x);
   for (int r = 0; r < n; r++) {
+    double v1 = vfree_[r] + (factored ? x[rows_[r].dof] : 0);
+    w_[r] = c[r] - alpha[r] * v1;
+    v_[r] = v1;
+    if (!std::isfinite(w_[r]) || !std::isfinite(v1)) {
+      w_[r] = 0;
+      v_[r] = vfree_[r];  // a row set to 0 no longer moves the others: the caller recomputes them
+      factored = false;
+    }
+  }
+  return factored;
+}
+
+bool CoupledSolver::TreeFactor(const mjModel* m, const mjData* d, const mjtNum* alpha) {
+  // h_ = L'*D*L of M + P' diag(alpha) P in place (hdinv_ = D^-1), as MuJoCo factors M
+  // (mj_factorI). The loop is mj_factorI's own because mujoco.h (4.0) has no call that factors a
+  // matrix other than d->M: mj_factorM writes d->qLD, which the constraint solver reads after the
+  // drives
+  int nv = m->nv;
+  mjtNum* h = h_.data();
+  for (int i = 0; i < m->nC; i++) h[i] = d->M[i];
+  for (int r = 0; r < nrow_; r++) {
     int dof = rows_[r].dof;
-    h[m->M_rowadr[dof] + m->M_rownnz[dof] - 1] += lin_alpha_[r];
-    x[dof] = lin_c_[r] - lin_alpha_[r] * vfree_[r];
+    h[m->M_rowadr[dof] + m->M_rownnz[dof] - 1] += alpha[r];
   }
   bool factored = true;
-  for (int k = nv - 1; k >= 0 && factored; k--) {  // h = L'*D*L in place, D^-1 apart
+  for (int k = nv - 1; k >= 0 && factored; k--) {
     int start = m->M_rowadr[k], diag = m->M_rownnz[k] - 1, end = start + diag;
     factored = h[end] > mjMINVAL && std::isfinite(h[end]);
     double inverse = factored ? 1 / h[end] : 0;
@@ -155,46 +178,106 @@ void CoupledSolver::LinearGuess(const mjModel* m, const mjData* d) {
     }
     for (int adr = start; adr < end; adr++) h[adr] *= inverse;
   }
-  if (factored) {
-    for (int k = nv - 1; k > 0; k--) {  // L'^-1
-      double xk = x[k];
-      if (xk == 0) continue;
-      for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-        x[m->M_colind[adr]] -= h[adr] * xk;
-      }
-    }
-    for (int k = 0; k < nv; k++) x[k] *= hdinv_[k];  // D^-1
-    for (int k = 0; k < nv; k++) {  // L^-1
-      double sum = 0;
-      for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-        sum += h[adr] * x[m->M_colind[adr]];
-      }
-      x[k] -= sum;
+  return factored;
+}
+
+void CoupledSolver::TreeBack(const mjModel* m, mjtNum* x) const {
+  // x = (L'*D*L)^-1 x with TreeFactor's factor, as mj_solveLD
+  const mjtNum* h = h_.data();
+  int nv = m->nv;
+  for (int k = nv - 1; k > 0; k--) {  // L'^-1
+    double xk = x[k];
+    if (xk == 0) continue;
+    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+      x[m->M_colind[adr]] -= h[adr] * xk;
     }
   }
-  for (int r = 0; r < n; r++) {
-    double v1 = vfree_[r] + (factored ? x[rows_[r].dof] : 0);
-    w_[r] = lin_c_[r] - lin_alpha_[r] * v1;
+  for (int k = 0; k < nv; k++) x[k] *= hdinv_[k];  // D^-1
+  for (int k = 0; k < nv; k++) {  // L^-1
+    double sum = 0;
+    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+      sum += h[adr] * x[m->M_colind[adr]];
+    }
+    x[k] -= sum;
+  }
+}
+
+bool CoupledSolver::TreeUpdate(const mjModel* m) {
+  // TreeStep where few rows' laws differ from the linear guess's (the set changed_, the others
+  // keep lin_c/lin_alpha): H' = H + U*D*U' with H the guess's factored matrix, U the changed rows'
+  // unit columns and D = alpha - lin_alpha there, and the right side grows by U*e, e = the change
+  // of c - alpha*vfree. Then dv = y - Z*mu with Z = H^-1 U (one solve a changed row),
+  // y = dv_guess + Z*e and (I + D*U'Z) mu = D*U'y: a small dense system instead of a new factor.
+  // False where that system is singular (the caller refactors)
+  int nv = m->nv, count = static_cast<int>(changed_.size());
+  mjtNum* y = dv_.data();
+  for (int i = 0; i < nv; i++) y[i] = guess_dv_[i];
+  for (int j = 0; j < count; j++) {
+    int r = changed_[j];
+    mjtNum* z = zc_.data() + j * nv;
+    for (int i = 0; i < nv; i++) z[i] = 0;
+    z[rows_[r].dof] = 1;
+    TreeBack(m, z);
+    double e = (step_c_[r] - step_alpha_[r] * vfree_[r]) - (lin_c_[r] - lin_alpha_[r] * vfree_[r]);
+    if (e != 0) {
+      for (int i = 0; i < nv; i++) y[i] += z[i] * e;
+    }
+  }
+  for (int i = 0; i < count; i++) {
+    int ri = changed_[i], dof = rows_[ri].dof;
+    double scale = step_alpha_[ri] - lin_alpha_[ri];
+    for (int j = 0; j < count; j++) q_[i * count + j] = (i == j ? 1 : 0) + scale * zc_[j * nv + dof];
+    rhs_[i] = scale * y[dof];
+  }
+  if (!LuSolve(q_.data(), rhs_.data(), count)) return false;
+  for (int j = 0; j < count; j++) {
+    const mjtNum* z = zc_.data() + j * nv;
+    double mu = rhs_[j];
+    if (mu != 0) {
+      for (int i = 0; i < nv; i++) y[i] -= z[i] * mu;
+    }
+  }
+  for (int r = 0; r < nrow_; r++) {
+    double v1 = vfree_[r] + y[rows_[r].dof];
+    w_[r] = step_c_[r] - step_alpha_[r] * v1;
     v_[r] = v1;
-    if (!std::isfinite(w_[r]) || !std::isfinite(v1)) {
-      w_[r] = 0;
-      v_[r] = vfree_[r];  // a row set to 0 no longer moves the others: they are recomputed below
-      factored = false;
-    }
+    if (!std::isfinite(w_[r]) || !std::isfinite(v1)) return false;
   }
-  if (!factored) {
-    for (int r = 0; r < n; r++) {
-      w_[r] = std::isfinite(w_[r]) ? w_[r] : 0;
-    }
-    FullResponse(d);
-    for (int r = 0; r < n; r++) x_[r] = w_[r], y_[r] = 0;
-    Velocities();
+  return true;
+}
+
+void CoupledSolver::TreeVelocities(const mjModel* m, const mjData* d) {
+  // v = vfree + A*(x + y) with A = P M^-1 P' from M's factor (HalfSolve, then the rows' z as in
+  // FreeVelocity), where Velocities needs the whole block A
+  mjtNum* force = row_force_.data();
+  for (int i = 0; i < m->nv; i++) force[i] = 0;
+  for (int r = 0; r < nrow_; r++) force[rows_[r].dof] = x_[r] + y_[r];
+  HalfSolve(m, d, force);
+  RowsOf(d, force, v_.data());
+  for (int r = 0; r < nrow_; r++) v_[r] += vfree_[r];
+}
+
+void CoupledSolver::LinearGuess(const mjModel* m, const mjData* d) {
+  // the solve's starting point: every row's unclamped law at once (TreeSolve). Newton and the
+  // sweeps then clamp and correct it, so a failed factorization only costs iterations: it falls
+  // back to one Jacobi step from vfree
+  guess_factored_ = TreeSolve(m, d, lin_c_.data(), lin_alpha_.data());
+  if (guess_factored_) {
+    guess_dv_.assign(delta_.begin(), delta_.end());
+    return;
   }
+  int n = nrow_;
+  for (int r = 0; r < n; r++) {
+    w_[r] = std::isfinite(w_[r]) ? w_[r] : 0;
+  }
+  FullResponse(d);
+  for (int r = 0; r < n; r++) x_[r] = w_[r], y_[r] = 0;
+  Velocities();
 }
 
 CoupledSolver::RowResult CoupledSolver::RowSolve(int r, double rest, double dt, const mjData* d) {
   solves_++;
-  double response = a_[r * nrow_ + r];
+  double response = adiag_[r];
 
   // implicit joint damping y = -h*D'*(v1 - qvel) folded in: v1 = base + reff*x, linear in x
   double hd = dt * damp_[r];
@@ -258,7 +341,7 @@ void CoupledSolver::Velocities() {
   }
 }
 
-bool CoupledSolver::Newton(const mjData* d, double dt, int* iterations) {
+bool CoupledSolver::Newton(const mjModel* m, const mjData* d, double dt, int* iterations) {
   // Newton's method on the fixed point w_r = G_r(rest_r(w)), where G_r is a row's own solve
   // (PD, clamp, damping) as a function of the velocity the other rows give it,
   // rest_r = vfree_r + sum_{s != r} A_rs w_s. G_r is piecewise linear: its slope is
@@ -268,7 +351,7 @@ bool CoupledSolver::Newton(const mjData* d, double dt, int* iterations) {
   for (int it = 0; it < kMaxNewton; it++) {
     double residual = 0;
     for (int r = 0; r < n; r++) {
-      double response = a_[r * n + r];
+      double response = adiag_[r];
       double held = x_[r] + y_[r];
       rest_[r] = v_[r] - response * held;
       result_[r] = RowSolve(r, rest_[r], dt, d);
@@ -282,47 +365,105 @@ bool CoupledSolver::Newton(const mjData* d, double dt, int* iterations) {
         x_[r] = result_[r].x;
         y_[r] = result_[r].y;
       }
-      Velocities();
+      // v_ is read after the solve only by the sweeps that follow a failed Newton (Settle), and
+      // the constrained loop recomputes its velocities from the efforts: no update is needed
       return true;
     }
-    for (int r = 0; r < n; r++) {
-      double response = a_[r * n + r];
-      if (flips_[r] >= kMaxFlips) {  // let go: only its damping responds
-        slope_[r] = -dt * damp_[r] / (1 + response * dt * damp_[r]);
-        continue;
-      }
-      if (!result_[r].clamped) {
-        slope_[r] = -lin_alpha_[r] / (1 + lin_alpha_[r] * response);
-        continue;
-      }
-      // a clamped row: the slope on the side where it is smaller (away from a kink)
-      double step = 1e-7 * (1 + std::fabs(rest_[r]));
-      double up = RowSolve(r, rest_[r] + step, dt, d).x, down = RowSolve(r, rest_[r] - step, dt, d).x;
-      double hd = dt * damp_[r], shrink = 1 / (1 + response * hd);
-      double rise = (up - result_[r].x) / step, fall = (result_[r].x - down) / step;
-      double slope_x = std::fabs(rise) < std::fabs(fall) ? rise : fall;
-      // y = -hd*(base + reff*x - qvel), base and reff as in RowSolve
-      slope_[r] = slope_x - hd * (shrink + response * shrink * slope_x);
-    }
-    for (int r = 0; r < n; r++) {
-      rhs_[r] = result_[r].x + result_[r].y - slope_[r] * (rest_[r] - vfree_[r]);
-    }
-    if (!SymmetricSolve(a_.data(), slope_.data(), rhs_.data(), n, &sym_rows_, &sym_h_, &sym_b_)) {
-      for (int r = 0; r < n; r++) {
-        const double* row = a_.data() + r * n;
-        for (int s = 0; s < n; s++) q_[r * n + s] = (s == r ? 1 : 0) - (s == r ? 0 : slope_[r] * row[s]);
-      }
-      if (!LuSolve(q_.data(), rhs_.data(), n)) return false;
-    }
-    for (int r = 0; r < n; r++) {
-      if (!std::isfinite(rhs_[r])) return false;
-      // keep the split of the new total impulse; only the sum matters for the next step
-      x_[r] = rhs_[r];
-      y_[r] = 0;
-    }
-    Velocities();
+    Slopes(d, dt);
+    if (!(tree_ && TreeStep(m, d)) && !DenseStep(d)) return false;
   }
   return false;
+}
+
+void CoupledSolver::Slopes(const mjData* d, double dt) {
+  // each row's dG_r/d(rest_r) at this step's rest_ and result_
+  for (int r = 0; r < nrow_; r++) {
+    double response = adiag_[r];
+    lawful_[r] = 0;
+    if (flips_[r] >= kMaxFlips) {  // let go: only its damping responds
+      slope_[r] = -dt * damp_[r] / (1 + response * dt * damp_[r]);
+      continue;
+    }
+    if (!result_[r].clamped) {  // its own law: lin_c, lin_alpha (Prepare)
+      slope_[r] = -lin_alpha_[r] / (1 + lin_alpha_[r] * response);
+      lawful_[r] = 1;
+      continue;
+    }
+    // a clamped row: the slope on the side where it is smaller (away from a kink)
+    double step = 1e-7 * (1 + std::fabs(rest_[r]));
+    double up = RowSolve(r, rest_[r] + step, dt, d).x, down = RowSolve(r, rest_[r] - step, dt, d).x;
+    double hd = dt * damp_[r], shrink = 1 / (1 + response * hd);
+    double rise = (up - result_[r].x) / step, fall = (result_[r].x - down) / step;
+    double slope_x = std::fabs(rise) < std::fabs(fall) ? rise : fall;
+    // y = -hd*(base + reff*x - qvel), base and reff as in RowSolve
+    slope_[r] = slope_x - hd * (shrink + response * shrink * slope_x);
+  }
+}
+
+bool CoupledSolver::TreeStep(const mjModel* m, const mjData* d) {
+  // the Newton step as a law per row on its end-of-step velocity: w_r = G_r + s_r*(rest_r - rest0_r)
+  // with rest_r = v_r - A_rr*w_r is w_r = c_r - alpha_r*v_r, alpha_r = -s_r/(1 + s_r*A_rr),
+  // c_r = (G_r - s_r*rest0_r)/(1 + s_r*A_rr) (an unclamped row gets its own law back), which
+  // TreeSolve solves on M's tree instead of the dense block. False (nothing kept) where a
+  // denominator is small or the factorization fails: the dense step takes it. A row held at its
+  // speed line without a slope (speed_effort_gradient 0) has 1 + s*A_rr = 0: its law is v = v_max,
+  // alpha infinite; near it alpha*A_rr ~ 1/denominator grows the condition number of
+  // M + P' diag(alpha) P, and c - alpha*v cancels (on the example quadruped alpha*A_rr reached
+  // 1e10 and v missed A*w by 1e-5 [rad/s])
+  changed_.clear();
+  for (int r = 0; r < nrow_; r++) {
+    if (lawful_[r]) {  // unclamped: its own law, as the linear guess has it
+      step_alpha_[r] = lin_alpha_[r];
+      step_c_[r] = lin_c_[r];
+      continue;
+    }
+    double s = slope_[r], denominator = 1 + s * adiag_[r];
+    if (!(std::fabs(denominator) > kTreeConditioning)) return false;
+    step_alpha_[r] = -s / denominator;
+    step_c_[r] = (result_[r].x + result_[r].y - s * rest_[r]) / denominator;
+    if (!std::isfinite(step_alpha_[r]) || !std::isfinite(step_c_[r])) return false;
+    changed_.push_back(r);
+  }
+  // a few changed rows: update the guess's factor; many: a new one (the cheaper, by count)
+  int count = static_cast<int>(changed_.size());
+  bool update = guess_factored_ && count * (solve_work_ + m->nv) + count * count * count < factor_work_;
+  if (!(update && TreeUpdate(m))) {
+    guess_factored_ = false;  // h_ is this step's factor from here on
+    if (!TreeSolve(m, d, step_c_.data(), step_alpha_.data())) return false;
+  }
+  for (int r = 0; r < nrow_; r++) {
+    // keep the split of the new total impulse; only the sum matters for the next step
+    x_[r] = w_[r];
+    y_[r] = 0;
+  }
+  // the velocities again from M's own factor, as Response's A: the residual that ends the Newton
+  // steps then reads velocities consistent with the impulses by construction, and an inexact
+  // step (rounding in an ill-conditioned update) costs an iteration, never a wrong answer
+  TreeVelocities(m, d);
+  return true;
+}
+
+bool CoupledSolver::DenseStep(const mjData* d) {
+  // the Newton step on the block A: (I - diag(slope)*A_off) w = G - slope*(rest - vfree)
+  int n = nrow_;
+  FullResponse(d);
+  for (int r = 0; r < n; r++) {
+    rhs_[r] = result_[r].x + result_[r].y - slope_[r] * (rest_[r] - vfree_[r]);
+  }
+  if (!SymmetricSolve(a_.data(), slope_.data(), rhs_.data(), n, &sym_rows_, &sym_h_, &sym_b_)) {
+    for (int r = 0; r < n; r++) {
+      const double* row = a_.data() + r * n;
+      for (int s = 0; s < n; s++) q_[r * n + s] = (s == r ? 1 : 0) - (s == r ? 0 : slope_[r] * row[s]);
+    }
+    if (!LuSolve(q_.data(), rhs_.data(), n)) return false;
+  }
+  for (int r = 0; r < n; r++) {
+    if (!std::isfinite(rhs_[r])) return false;
+    x_[r] = rhs_[r];
+    y_[r] = 0;
+  }
+  Velocities();
+  return true;
 }
 
 int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
@@ -344,16 +485,15 @@ int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
     if (drive) effort_[k] = x_[r] / dt;
   }
   if (!any) return 0;
-  FullResponse(d);
-
-  return Settle(d, dt);
+  return Settle(m, d, dt);
 }
 
-int CoupledSolver::Settle(const mjData* d, double dt) {
+int CoupledSolver::Settle(const mjModel* m, const mjData* d, double dt) {
   // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
   int n = nrow_;
   int iterations = 0;
-  if (Newton(d, dt, &iterations)) return iterations;
+  if (Newton(m, d, dt, &iterations)) return iterations;
+  FullResponse(d);  // the sweeps read A's columns
   for (int r = 0; r < n; r++) stale_[r] = 1;
   int sweeps = 0;
   for (; sweeps < kMaxSweeps; sweeps++) {
