@@ -186,6 +186,9 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   row_force_.assign(m->nv, 0);
   lawful_.assign(n, 0);
   changed_.reserve(n);
+  law_a_.assign(n, 0);
+  law_b_.assign(n, 0);
+  law_g_.assign(n, 0);
   guess_dv_.assign(m->nv, 0);
   dv_.assign(m->nv, 0);
   zc_.assign(static_cast<size_t>(n) * m->nv, 0);

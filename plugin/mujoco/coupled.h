@@ -144,6 +144,7 @@ class CoupledSolver {
   std::vector<mjtNum> step_c_, step_alpha_;  // Newton: each row's law of the step (TreeStep)
   std::vector<char> lawful_;             // per row: its step law is the linear guess's (Slopes)
   std::vector<int> changed_;             // the rows whose law is not (TreeStep)
+  std::vector<mjtNum> law_a_, law_b_, law_g_;  // their laws a*w + b*v = g, by index in changed_
   bool guess_factored_ = false;          // h_ holds the linear guess's factor, guess_dv_ its dv
   std::vector<mjtNum> guess_dv_, dv_;    // over the dofs
   std::vector<mjtNum> zc_;               // TreeUpdate: H^-1 on each changed row's unit column

@@ -15,8 +15,8 @@
 namespace drive_envelope::mujoco_plugin {
 namespace {
 
-// TreeStep takes rows with |1 + slope*A_rr| above this (alpha*A_rr below its inverse, 1e4):
-// there the tree solve's velocities match A*w to rounding; below, the dense step
+// TreeStep refactors with rows whose |1 + slope*A_rr| is above this (alpha*A_rr below its
+// inverse, 1e4): there the tree solve's velocities match A*w to rounding
 constexpr double kTreeConditioning = 1e-4;
 
 // whether a total impulse x and the end-of-step velocity v it gives lie inside the envelope by a
@@ -203,45 +203,45 @@ void CoupledSolver::TreeBack(const mjModel* m, mjtNum* x) const {
 }
 
 bool CoupledSolver::TreeUpdate(const mjModel* m) {
-  // TreeStep where few rows' laws differ from the linear guess's (the set changed_, the others
-  // keep lin_c/lin_alpha): H' = H + U*D*U' with H the guess's factored matrix, U the changed rows'
-  // unit columns and D = alpha - lin_alpha there, and the right side grows by U*e, e = the change
-  // of c - alpha*vfree. Then dv = y - Z*mu with Z = H^-1 U (one solve a changed row),
-  // y = dv_guess + Z*e and (I + D*U'Z) mu = D*U'y: a small dense system instead of a new factor.
-  // False where that system is singular (the caller refactors)
+  // TreeStep where few rows' laws differ from the linear guess's (the set changed_; the others keep
+  // w = lin_c - lin_alpha*v). With H the guess's factored matrix, M dv = P' w reads
+  // H dv = P'(lin_c - lin_alpha*vfree) + U t: U the changed rows' unit columns, t their impulse
+  // beyond their guess law, t = w - (lin_c - lin_alpha*v). So dv = dv_guess + Z t with Z = H^-1 U
+  // (one solve a changed row) and, at the changed rows, v = v_guess + S t with S = U'Z. Their laws
+  // a*w + b*v = g (law_a_, law_b_, law_g_: a = 0 holds a row at a velocity, a speed cap without a
+  // slope) give the small system [diag(a) + diag(b - a*lin_alpha) S] t = g - a*lin_c
+  // - (b - a*lin_alpha) v_guess, instead of a new factor. False where it is singular
   int nv = m->nv, count = static_cast<int>(changed_.size());
-  mjtNum* y = dv_.data();
-  for (int i = 0; i < nv; i++) y[i] = guess_dv_[i];
+  mjtNum* dv = dv_.data();
+  for (int i = 0; i < nv; i++) dv[i] = guess_dv_[i];
   for (int j = 0; j < count; j++) {
-    int r = changed_[j];
     mjtNum* z = zc_.data() + j * nv;
     for (int i = 0; i < nv; i++) z[i] = 0;
-    z[rows_[r].dof] = 1;
+    z[rows_[changed_[j]].dof] = 1;
     TreeBack(m, z);
-    double e = (step_c_[r] - step_alpha_[r] * vfree_[r]) - (lin_c_[r] - lin_alpha_[r] * vfree_[r]);
-    if (e != 0) {
-      for (int i = 0; i < nv; i++) y[i] += z[i] * e;
-    }
   }
   for (int i = 0; i < count; i++) {
-    int ri = changed_[i], dof = rows_[ri].dof;
-    double scale = step_alpha_[ri] - lin_alpha_[ri];
-    for (int j = 0; j < count; j++) q_[i * count + j] = (i == j ? 1 : 0) + scale * zc_[j * nv + dof];
-    rhs_[i] = scale * y[dof];
+    int r = changed_[i], dof = rows_[r].dof;
+    double a = law_a_[i], coupling = law_b_[i] - a * lin_alpha_[r];
+    for (int j = 0; j < count; j++) q_[i * count + j] = (i == j ? a : 0) + coupling * zc_[j * nv + dof];
+    rhs_[i] = law_g_[i] - a * lin_c_[r] - coupling * (vfree_[r] + guess_dv_[dof]);
   }
   if (!LuSolve(q_.data(), rhs_.data(), count)) return false;
   for (int j = 0; j < count; j++) {
     const mjtNum* z = zc_.data() + j * nv;
-    double mu = rhs_[j];
-    if (mu != 0) {
-      for (int i = 0; i < nv; i++) y[i] -= z[i] * mu;
+    double t = rhs_[j];
+    if (t != 0) {
+      for (int i = 0; i < nv; i++) dv[i] += z[i] * t;
     }
   }
   for (int r = 0; r < nrow_; r++) {
-    double v1 = vfree_[r] + y[rows_[r].dof];
-    w_[r] = step_c_[r] - step_alpha_[r] * v1;
+    double v1 = vfree_[r] + dv[rows_[r].dof];
+    w_[r] = lin_c_[r] - lin_alpha_[r] * v1;
     v_[r] = v1;
-    if (!std::isfinite(w_[r]) || !std::isfinite(v1)) return false;
+  }
+  for (int j = 0; j < count; j++) w_[changed_[j]] += rhs_[j];
+  for (int r = 0; r < nrow_; r++) {
+    if (!std::isfinite(w_[r]) || !std::isfinite(v_[r])) return false;
   }
   return true;
 }
@@ -402,32 +402,43 @@ void CoupledSolver::Slopes(const mjData* d, double dt) {
 
 bool CoupledSolver::TreeStep(const mjModel* m, const mjData* d) {
   // the Newton step as a law per row on its end-of-step velocity: w_r = G_r + s_r*(rest_r - rest0_r)
-  // with rest_r = v_r - A_rr*w_r is w_r = c_r - alpha_r*v_r, alpha_r = -s_r/(1 + s_r*A_rr),
-  // c_r = (G_r - s_r*rest0_r)/(1 + s_r*A_rr) (an unclamped row gets its own law back), which
-  // TreeSolve solves on M's tree instead of the dense block. False (nothing kept) where a
-  // denominator is small or the factorization fails: the dense step takes it. A row held at its
-  // speed line without a slope (speed_effort_gradient 0) has 1 + s*A_rr = 0: its law is v = v_max,
-  // alpha infinite; near it alpha*A_rr ~ 1/denominator grows the condition number of
-  // M + P' diag(alpha) P, and c - alpha*v cancels (on the example quadruped alpha*A_rr reached
-  // 1e10 and v missed A*w by 1e-5 [rad/s])
+  // with rest_r = v_r - A_rr*w_r is a*w_r + b*v_r = g with a = 1 + s_r*A_rr, b = -s_r,
+  // g = G_r - s_r*rest0_r (an unclamped row keeps its own law, lin_c/lin_alpha), solved on M's tree
+  // instead of the dense block: an update of the linear guess's factor for a few changed rows
+  // (TreeUpdate, any a), a new factor for many (TreeSolve, alpha = -s/a, c = g/a). A row held at
+  // its speed line without a slope (speed_effort_gradient 0) has a = 0: its law is v = v_max, and
+  // near it alpha grows the condition number of M + P' diag(alpha) P and c - alpha*v cancels (on
+  // the example quadruped alpha*A_rr reached 1e10 and v missed A*w by 1e-5 [rad/s]): a new factor
+  // takes only |a| > kTreeConditioning, the dense step the rest. False (nothing kept) where neither
+  // tree path serves
   changed_.clear();
+  bool finite_alpha = true;
   for (int r = 0; r < nrow_; r++) {
-    if (lawful_[r]) {  // unclamped: its own law, as the linear guess has it
-      step_alpha_[r] = lin_alpha_[r];
-      step_c_[r] = lin_c_[r];
-      continue;
-    }
-    double s = slope_[r], denominator = 1 + s * adiag_[r];
-    if (!(std::fabs(denominator) > kTreeConditioning)) return false;
-    step_alpha_[r] = -s / denominator;
-    step_c_[r] = (result_[r].x + result_[r].y - s * rest_[r]) / denominator;
-    if (!std::isfinite(step_alpha_[r]) || !std::isfinite(step_c_[r])) return false;
+    if (lawful_[r]) continue;
+    double s = slope_[r];
+    law_a_[changed_.size()] = 1 + s * adiag_[r];
+    law_b_[changed_.size()] = -s;
+    law_g_[changed_.size()] = result_[r].x + result_[r].y - s * rest_[r];
+    finite_alpha &= std::fabs(1 + s * adiag_[r]) > kTreeConditioning;
     changed_.push_back(r);
   }
-  // a few changed rows: update the guess's factor; many: a new one (the cheaper, by count)
+  // a few changed rows: update the guess's factor; many: a new one (the cheaper, by count), unless
+  // a row is held at a velocity (the update still beats the dense step there)
   int count = static_cast<int>(changed_.size());
-  bool update = guess_factored_ && count * (solve_work_ + m->nv) + count * count * count < factor_work_;
+  bool cheap = count * (solve_work_ + m->nv) + count * count * count < factor_work_;
+  bool update = guess_factored_ && (cheap || !finite_alpha);
   if (!(update && TreeUpdate(m))) {
+    if (!finite_alpha) return false;
+    for (int r = 0; r < nrow_; r++) {
+      step_alpha_[r] = lin_alpha_[r];
+      step_c_[r] = lin_c_[r];
+    }
+    for (int j = 0; j < count; j++) {
+      int r = changed_[j];
+      step_alpha_[r] = law_b_[j] / law_a_[j];
+      step_c_[r] = law_g_[j] / law_a_[j];
+      if (!std::isfinite(step_alpha_[r]) || !std::isfinite(step_c_[r])) return false;
+    }
     guess_factored_ = false;  // h_ is this step's factor from here on
     if (!TreeSolve(m, d, step_c_.data(), step_alpha_.data())) return false;
   }
