@@ -117,6 +117,11 @@ def test_pattern_matching_nothing_names_the_key_and_close_names(folder: Path) ->
     message = str(info.value)
     assert message.startswith(f"{path}: key 'joints.FL_hip': matches no joint name")
     assert "'FL_hip_joint'" in message and "\n" not in message
+    assert "after the last '/'" not in message  # MJCF joint names: no prim paths to explain
+    with pytest.raises(
+        InputError, match=r"matches no joint name \(the part after the last '/'\) of the 1 joints"
+    ):
+        match_joints(read_map(path), ["/Robot/FL_hip_joint"])
 
 
 @pytest.mark.parametrize(

@@ -287,7 +287,9 @@ def _no_match(entry: MapEntry, joints: Sequence[str]) -> InputError:
     if not hint:
         close = difflib.get_close_matches(entry.pattern, subjects, n=_SHOWN, cutoff=0.5)
         hint = f"; close: {', '.join(repr(c) for c in close)}" if close else ""
-    what = "joint path" if "/" in entry.pattern else "joint name (the part after the last '/')"
+    what = "joint path" if "/" in entry.pattern else "joint name"
+    if "/" not in entry.pattern and any("/" in joint for joint in joints):
+        what += " (the part after the last '/')"  # how a USD prim path is matched; MJCF names have no '/'
     return InputError(
         f"{entry.where}: matches no {what} of the {len(joints)} joints{hint}{glob_hint(entry.pattern)}"
     )
