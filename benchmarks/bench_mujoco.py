@@ -31,13 +31,15 @@ compiled ones: ``mujoco apply --map`` without gains), against those actuators as
 follows its start keyframe plus a sine, phases spread (one radian apart):
 
 * G1 on the floor: keyframe ``stand``, 0.3 rad at 6 rad/s from the first step (29 hinges; it falls);
-* Kinova Gen3 (fixed base, implicitfast): keyframe ``home``, 0.3 rad at 2 rad/s ramped in over
+* Kinova Gen3 (fixed base, implicitfast): keyframe ``home``, 0.3 rad at 4.5 rad/s ramped in over
   0.5 s. Kinova's caps (39 / 9 N*m, 1.3963 / 1.2218 rad/s) are far below the model's forcerange (105 /
-  52 N*m); a target near the speed cap, or a jump at the first step, takes a joint past it, where
-  the drive lets go (zero effort) and the arm drops (at 4 rad/s joints reached 4x their caps).
-  Menagerie's base_link and shoulder_link meshes overlap at rest (4 contacts), so joint 1 grinds on
-  its base. With the model's stiff gains (kp 2000, kv 100) the coupled drives take 3.9 Newton
-  iterations per step on average (docs/mujoco.md, "Cost");
+  52 N*m); the small actuators reach their speed cap and let go there now and then (zero effort,
+  PhysX's rule); at 5 rad/s the arm falls onto its joint limits.
+  Menagerie's base_link and shoulder_link meshes overlap in every pose (12 mm, 4 contacts), so
+  joint 1 would grind on its base: both kinds exclude that pair, as the Gen3's users do. With the
+  contacts, the model's stiff gains (kp 2000, kv 100) fight them: the coupled drives took 3.9
+  Newton iterations per step on average and let go in 1,631 of 10,500 samples; without them no drive
+  reaches its envelope (docs/mujoco.md, "Cost");
 * ANYmal C on the floor (Euler, elliptic cones): the keyframe ``standing`` of Menagerie's
   anymal_c_mjx.xml (anymal_c.xml has none; added here), 0.3 rad at 10 rad/s ramped in over 0.5 s:
   up to 3 rad/s, past the ANYdrive's 2.5 rad/s corner, so 11 of the 12 drives reach their envelope
@@ -98,6 +100,8 @@ class Robot:
     """Time over which the amplitude rises from 0, linearly [s]; 0: the waves start at full amplitude."""
     key_qpos: tuple[float, ...] | None = None
     """The start pose's qpos, added as ``keyframe`` when the scene file has no keyframe."""
+    exclude: tuple[tuple[str, str], ...] = ()
+    """Body pairs whose contacts are excluded (``<contact><exclude>``), as the model's users add them."""
 
 
 # Menagerie's anymal_c_mjx.xml keyframe "standing" ("A higher standing position"); anymal_c.xml has none
@@ -126,10 +130,15 @@ ROBOTS = {
         nu=7,
         keyframe="home",
         amplitude=0.3,
-        # 0.6 rad/s at most, half the small actuators' 1.2218: near the cap the PD overshoots it, the
-        # drive lets go (PhysX's rule) and the arm falls
-        rate=2.0,
+        # 1.35 rad/s at most, past the small actuators' 1.2218 cap: they reach it and let go for a
+        # step now and then (PhysX's rule, 35 of 10,500 samples); at 5 rad/s the arm falls onto its
+        # joint limits
+        rate=4.5,
         ramp=0.5,
+        # the meshes overlap in every pose (12 mm, 4 contacts): with them joint 1 grinds on its base,
+        # lags its target and saturates (3.9 Newton iterations per step, 1,631 of 10,500 samples let
+        # go); without them no drive reaches its envelope. Gen3 users exclude the pair
+        exclude=(("base_link", "shoulder_link"),),
     ),
     "anymal-c": Robot(
         label="Menagerie ANYmal C on a floor",
@@ -233,6 +242,8 @@ def build_robot(robot: Robot, kind: str, solver: Any = "exact", iterations: tupl
 
     spec = load_spec(robot.scene)
     _add_keyframe(spec, robot)
+    for body1, body2 in robot.exclude:
+        spec.add_exclude(bodyname1=body1, bodyname2=body2)
     if kind == "plugin":
         # dampratio="1" positions: write each compiled kv (and kp) so the drives keep those gains
         compiled = spec.compile()

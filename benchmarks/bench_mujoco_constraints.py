@@ -7,7 +7,8 @@ keep their compiled kv), Euler at the model's time step, every driven joint foll
 
 * ANYmal C on the floor (``anybotics_anymal_c/scene.xml``, dropped from its default pose, elliptic
   cones): ``examples/newton/anymal_map.toml`` (hips RMD-X8-120, knees RMD-X12-320), A = 0.3 rad;
-* Kinova Gen3 (``kinova_gen3/scene.xml``, keyframe ``home``, joint limits on joints 2, 4, 6): no
+* Kinova Gen3 (``kinova_gen3/scene.xml``, keyframe ``home``, joint limits on joints 2, 4, 6, and
+  Menagerie's base_link and shoulder_link meshes overlapping in every pose: 4 contacts on joint 1): no
   Kinova datasheet in the catalog, so stand-ins of its two actuator classes (the model's 105 / 52 N*m
   force ranges): joints 1-4 the RMD-X8-120, 5-7 the RobStride RS03, A = 0.5 rad;
 * Unitree G1 on the floor (``unitree_g1/scene.xml``, keyframe ``stand``): the ``unitree-g1`` map, A = 0.3.

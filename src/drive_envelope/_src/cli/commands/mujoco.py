@@ -119,6 +119,7 @@ def _apply(args: argparse.Namespace) -> int:
     import warnings
 
     from drive_envelope._src.adapters.mujoco.bypass import bypass_warnings, is_bypass_warning, other_actuators
+    from drive_envelope._src.adapters.mujoco.contacts import neighbour_contact_warnings, neighbour_contacts
     from drive_envelope._src.adapters.mujoco.loader import load_plugin
     from drive_envelope._src.adapters.mujoco.mjcf import apply_drives, load_spec, write_mjcf
     from drive_envelope._src.adapters.mujoco.params import model_drives
@@ -142,6 +143,8 @@ def _apply(args: argparse.Namespace) -> int:
         warn(message)
     for message in _report(done, model):
         warn(message)
+    for message in neighbour_contact_warnings(neighbour_contacts(model), [item.joint for item in done]):
+        warn(f"{args.model}: {message}")
     if args.format == "json":
         _print_apply_json(done, args, len(drives))
     for item in done if args.format == "text" else ():
