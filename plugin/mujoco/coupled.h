@@ -100,6 +100,8 @@ class CoupledSolver {
   void Track(int r, const RowResult& result);
   void Velocities();
   bool Newton(const mjModel* m, const mjData* d, double dt, int* iterations);
+  bool HeldLetGo(const mjData* d, double dt);
+  bool Cycling() const;
   void Slopes(const mjData* d, double dt);
   bool TreeStep(const mjModel* m, const mjData* d);
   bool DenseStep(const mjData* d);
@@ -152,6 +154,8 @@ class CoupledSolver {
   std::vector<int> free_, fixed_;
   std::vector<char> stale_, warned_;
   std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
+  bool hold_ = true;  // a row past kMaxFlips lets go (Newton); false in the Gauss-Seidel sweeps
+  std::vector<double> held_x_, held_y_, held_effort_;  // Newton's answer while the sweeps try
   std::vector<double> rest_, slope_;
   std::vector<int> sym_rows_;            // Newton: the rows of the symmetric system (SymmetricSolve)
   std::vector<mjtNum> sym_h_, sym_b_;    // its matrix and right side

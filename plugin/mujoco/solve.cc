@@ -287,7 +287,7 @@ CoupledSolver::RowResult CoupledSolver::RowSolve(int r, double rest, double dt, 
 
   RowResult out;
   int k = rows_[r].drive;
-  if (k >= 0 && request_[k].active && flips_[r] < kMaxFlips) {
+  if (k >= 0 && request_[k].active && (!hold_ || flips_[r] < kMaxFlips)) {
     const Request& q = request_[k];
     const DriveParams& p = q.params;
     const Drive& drive = drives_[k];
@@ -373,6 +373,29 @@ bool CoupledSolver::Newton(const mjModel* m, const mjData* d, double dt, int* it
     if (!(tree_ && TreeStep(m, d)) && !DenseStep(d)) return false;
   }
   return false;
+}
+
+bool CoupledSolver::Cycling() const {
+  // only without holding (after a converged Newton): a drive back and forth across the jump
+  if (hold_) return false;
+  for (int r = 0; r < nrow_; r++) {
+    if (flips_[r] > kMaxFlips) return true;
+  }
+  return false;
+}
+
+bool CoupledSolver::HeldLetGo(const mjData* d, double dt) {
+  // a drive held let go after kMaxFlips is consistent only where its own solve, not held, lets
+  // go too at the velocity the others give it; else (a Franka Panda's shoulder at 1.7 of its
+  // 2.175 rad/s, held at 0 for 13 steps where its law asks for 87 N*m) Gauss-Seidel takes over
+  for (int r = 0; r < nrow_; r++) {
+    if (flips_[r] < kMaxFlips) continue;
+    hold_ = false;
+    RowResult own = RowSolve(r, rest_[r], dt, d);
+    hold_ = true;
+    if (own.x != 0) return false;
+  }
+  return true;
 }
 
 void CoupledSolver::Slopes(const mjData* d, double dt) {
@@ -503,11 +526,25 @@ int CoupledSolver::Settle(const mjModel* m, const mjData* d, double dt) {
   // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
   int n = nrow_;
   int iterations = 0;
-  if (Newton(m, d, dt, &iterations)) return iterations;
+  bool converged = Newton(m, d, dt, &iterations);
+  if (converged && HeldLetGo(d, dt)) return iterations;
+  if (converged) {  // Newton's answer holds a drive let go that would not: kept if the sweeps cycle
+    held_x_.assign(x_.begin(), x_.end());
+    held_y_.assign(y_.begin(), y_.end());
+    held_effort_.assign(effort_.begin(), effort_.end());
+  }
   FullResponse(d);  // the sweeps read A's columns
   for (int r = 0; r < n; r++) stale_[r] = 1;
+  // Gauss-Seidel from Newton's last state. After a converged Newton no drive is held let go:
+  // where a consistent state exists the sweeps get there, and where the drives cycle across the
+  // jump Newton's answer stays. After a failed one the holding ends the cycles, as in Newton
+  hold_ = !converged;
+  if (converged) {  // count the switches anew: a drive that cycles in the sweeps too ends them
+    for (int r = 0; r < n; r++) released_[r] = -1, flips_[r] = 0;
+  }
+  bool settled = false;
   int sweeps = 0;
-  for (; sweeps < kMaxSweeps; sweeps++) {
+  for (; sweeps < kMaxSweeps && !Cycling(); sweeps++) {
     bool solved = false;
     for (int r = 0; r < n; r++) {
       if (!stale_[r]) continue;
@@ -531,7 +568,16 @@ int CoupledSolver::Settle(const mjModel* m, const mjData* d, double dt) {
         if (std::fabs(dv) > kTolerance * (1 + std::fabs(v_[s]))) stale_[s] = 1;
       }
     }
-    if (!solved) break;
+    if (!solved) {
+      settled = true;
+      break;
+    }
+  }
+  hold_ = true;
+  if (converged && !settled) {
+    x_.assign(held_x_.begin(), held_x_.end());
+    y_.assign(held_y_.begin(), held_y_.end());
+    effort_.assign(held_effort_.begin(), held_effort_.end());
   }
   return iterations + sweeps;
 }

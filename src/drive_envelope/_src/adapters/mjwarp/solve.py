@@ -178,16 +178,18 @@ def _row_solve(
     r: int,
     rest: wp.float64,
     dt: wp.float64,
+    hold: bool,
 ):
     """Drive r's own solve at the velocity ``rest`` the others give it: PD impulse, then the clamp.
 
     Returns (impulse x [N*m*s or N*s], effort [N*m or N], 1 if the envelope changed the request).
-    The clamp is on the TOTAL actuator impulse (drive + ff) at the end-of-step velocity.
+    The clamp is on the TOTAL actuator impulse (drive + ff) at the end-of-step velocity. With
+    ``hold``, a drive that switched MAX_FLIPS times lets go (0), as in Newton.
     """
     iwork[lay.solves, w] = iwork[lay.solves, w] + 1
     zero = wp.float64(0.0)
     response = work[lay.a + r * lay.n + r, w]
-    if iwork[lay.active + r, w] == 0 or iwork[lay.flips + r, w] >= _MAX_FLIPS:
+    if iwork[lay.active + r, w] == 0 or (hold and iwork[lay.flips + r, w] >= _MAX_FLIPS):
         return zero, zero, 0
     p = lay.prm + 6 * r
     ff = work[lay.ff + r, w] * dt
@@ -307,7 +309,7 @@ def _newton(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], 
             held = work[lay.x + r, w]
             rest = work[lay.v + r, w] - response * held
             work[lay.rest + r, w] = rest
-            gx, effort, clamped = _row_solve(work, iwork, lay, accel, w, r, rest, dt)
+            gx, effort, clamped = _row_solve(work, iwork, lay, accel, w, r, rest, dt, True)
             work[lay.gx + r, w] = gx
             iwork[lay.clamped + r, w] = clamped
             _track(work, iwork, lay, w, r, gx, effort)
@@ -328,8 +330,8 @@ def _newton(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], 
                 else:  # the slope on the side where it is smaller (away from a kink)
                     rest = work[lay.rest + r, w]
                     step = _STEP * (wp.float64(1.0) + wp.abs(rest))
-                    up, _e_up, _c_up = _row_solve(work, iwork, lay, accel, w, r, rest + step, dt)
-                    down, _e_down, _c_down = _row_solve(work, iwork, lay, accel, w, r, rest - step, dt)
+                    up, _e_up, _c_up = _row_solve(work, iwork, lay, accel, w, r, rest + step, dt, True)
+                    down, _e_down, _c_down = _row_solve(work, iwork, lay, accel, w, r, rest - step, dt, True)
                     rise = (up - work[lay.gx + r, w]) / step
                     fall = (work[lay.gx + r, w] - down) / step
                     slope = wp.where(wp.abs(rise) < wp.abs(fall), rise, fall)
@@ -355,17 +357,26 @@ def _newton(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], 
 
 
 @wp.func
-def _gauss_seidel(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64):
-    """Gauss-Seidel over the drives in DOF order from where Newton left; returns the sweeps.
+def _gauss_seidel(
+    work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64, hold: bool
+):
+    """Gauss-Seidel over the drives in DOF order from where Newton left; returns (sweeps, settled).
 
     A drive is solved again when another's update moved its velocity by more than 1e-12*(1 + |v|);
-    it stops after a sweep that solved no drive or after MAX_SWEEPS.
+    it stops after a sweep that solved no drive (settled) or after MAX_SWEEPS. Without ``hold`` no
+    drive is held let go, and a drive switching more than MAX_FLIPS times ends the sweeps (a cycle).
     """
     n = lay.n
     for r in range(n):
         iwork[lay.stale + r, w] = 1
     sweeps = wp.int32(0)
     while sweeps < _MAX_SWEEPS:
+        if not hold:
+            cycling = wp.bool(False)
+            for r in range(n):
+                cycling = cycling or iwork[lay.flips + r, w] > _MAX_FLIPS
+            if cycling:
+                return sweeps, False
         solved = wp.bool(False)
         for r in range(n):
             if iwork[lay.stale + r, w] != 0:
@@ -374,7 +385,7 @@ def _gauss_seidel(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.in
                 response = work[lay.a + r * n + r, w]
                 held = work[lay.x + r, w]
                 rest = work[lay.v + r, w] - response * held  # velocity without this drive's impulse
-                gx, effort, _clamped = _row_solve(work, iwork, lay, accel, w, r, rest, dt)
+                gx, effort, _clamped = _row_solve(work, iwork, lay, accel, w, r, rest, dt, hold)
                 _track(work, iwork, lay, w, r, gx, effort)
                 delta = gx - held
                 work[lay.x + r, w] = gx
@@ -388,9 +399,21 @@ def _gauss_seidel(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.in
                             if wp.abs(dv) > _TOL * (wp.float64(1.0) + wp.abs(vs)):
                                 iwork[lay.stale + s, w] = 1
         if not solved:
-            break
+            return sweeps, True
         sweeps += 1
-    return sweeps
+    return sweeps, False
+
+
+@wp.func
+def _held_let_go(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int32], w: int, dt: wp.float64):
+    """Whether each drive Newton held let go (MAX_FLIPS switches) lets go by its own solve too (HeldLetGo)."""
+    for r in range(lay.n):
+        if iwork[lay.active + r, w] != 0 and iwork[lay.flips + r, w] >= _MAX_FLIPS:
+            rest = work[lay.v + r, w] - work[lay.a + r * lay.n + r, w] * work[lay.x + r, w]
+            own, _effort, _clamped = _row_solve(work, iwork, lay, accel, w, r, rest, dt, False)
+            if own != wp.float64(0.0):
+                return False
+    return True
 
 
 @wp.func
@@ -416,6 +439,21 @@ def solve_drives(work: Work, iwork: IntWork, lay: Layout, accel: wp.array[wp.int
     if not outside:
         return 0
     converged, steps = _newton(work, iwork, lay, accel, w, dt)
-    if converged:
+    if converged and _held_let_go(work, iwork, lay, accel, w, dt):
         return steps
-    return steps + _gauss_seidel(work, iwork, lay, accel, w, dt)
+    if not converged:
+        sweeps, _settled = _gauss_seidel(work, iwork, lay, accel, w, dt, True)
+        return steps + sweeps
+    # Newton held a drive let go that its own solve would drive: Gauss-Seidel without holding, from
+    # Newton's answer (kept in gx and slope, unused by the sweeps) if the sweeps do not settle
+    for r in range(n):
+        work[lay.gx + r, w] = work[lay.x + r, w]
+        work[lay.slope + r, w] = work[lay.effort + r, w]
+        iwork[lay.released + r, w] = -1
+        iwork[lay.flips + r, w] = 0
+    sweeps, settled = _gauss_seidel(work, iwork, lay, accel, w, dt, False)
+    if not settled:
+        for r in range(n):
+            work[lay.x + r, w] = work[lay.gx + r, w]
+            work[lay.effort + r, w] = work[lay.slope + r, w]
+    return steps + sweeps
