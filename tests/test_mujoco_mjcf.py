@@ -83,6 +83,33 @@ def test_apply_one_joint_writes_an_mjcf_that_loads_with_every_digit(
     assert 'dynprm="8 12.147491593880533 0 0.1 300 30"' in out.read_text()
 
 
+def test_a_joint_given_twice_is_refused_naming_both(robot: Path, tmp_path: Path, capsys: Any) -> None:
+    """Refuse a repeated --joint (argparse kept only the last, equipping one joint of two silently)."""
+    out = tmp_path / "o.xml"
+    envelope = str(tmp_path / "joint.toml")
+    with pytest.raises(SystemExit) as info:
+        _cli("mujoco", "apply", str(robot), "--joint", "shoulder", "--joint", "elbow", "--envelope", envelope,
+             "-o", str(out))  # fmt: skip
+    assert info.value.code == 2 and not out.exists()
+    assert "--joint: given twice ('shoulder', 'elbow'): one joint per --joint run" in capsys.readouterr().err
+
+
+def test_stiffness_without_damping_says_which_damping_stays(
+    mujoco: Any, robot: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Name the kept kv (30 N*m*s/rad of the shoulder's general PD, biasprm 0 -300 -30) beside the new kp."""
+    out = tmp_path / "o.xml"
+    envelope = str(tmp_path / "joint.toml")
+    assert _cli("mujoco", "apply", str(robot), "--joint", "shoulder", "--envelope", envelope,
+                "--stiffness", "60", "-o", str(out)) == 0  # fmt: skip
+    printed = capsys.readouterr()
+    assert "gains stiffness given, the other from position 'a_shoulder')" in printed.out
+    assert (
+        "--stiffness is given without --damping: 1 joint(s) keep their replaced actuator's damping "
+        "(shoulder 30 N*m*s/rad), tuned for its own gains; give --damping too to set both"
+    ) in printed.err
+
+
 def test_apply_a_map_equips_every_joint_keeping_what_each_actuator_meant(
     mujoco: Any, robot: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

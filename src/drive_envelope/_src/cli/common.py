@@ -95,6 +95,21 @@ def add_output_argument(
     parser.add_argument("-o", "--output", metavar=metavar, default=None, required=required, help=help)
 
 
+class _OneJoint(argparse.Action):
+    """``--joint`` given once: argparse keeps the last of repeated flags, which drops joints silently."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any, option: Any = None
+    ) -> None:
+        previous = getattr(namespace, self.dest, None)
+        if previous is not None:
+            parser.error(
+                f"{option}: given twice ({previous!r}, {values!r}): one joint per --joint run; for several "
+                "joints write a map file (--map, a pattern per joint or group)"
+            )
+        setattr(namespace, self.dest, values)
+
+
 def add_joint_source_arguments(
     parser: argparse.ArgumentParser, *, joint: tuple[str, str], map_help: str
 ) -> None:
@@ -103,7 +118,7 @@ def add_joint_source_arguments(
     ``joint`` is the (metavar, help) of ``--joint``: a joint name in MJCF, a prim path in USD.
     """
     target = parser.add_mutually_exclusive_group(required=True)
-    target.add_argument("--joint", metavar=joint[0], help=joint[1])
+    target.add_argument("--joint", metavar=joint[0], help=joint[1], action=_OneJoint)
     target.add_argument("--map", metavar="MAP", help=map_help)
     source = parser.add_mutually_exclusive_group()
     source.add_argument("--datasheet", metavar="FILE", help="datasheet file or catalog name (with --joint)")

@@ -263,8 +263,13 @@ def apply_drives(
             if message.startswith("add_drive("):
                 message = str(_at(item, InputError(message)))
             warnings.warn(message, stacklevel=2)
-        given = "given" if stiffness is not None and damping is not None else ""
-        source = given or (f"{first.kind} {first.name!r}" if first else "given")
+        kept = f"{first.kind} {first.name!r}" if first else "given"
+        if stiffness is not None and damping is not None:
+            source = "given"
+        elif stiffness is not None or damping is not None:  # one given, the other kept: say which
+            source = f"{'stiffness' if stiffness is not None else 'damping'} given, the other from {kept}"
+        else:
+            source = kept
         done.append(
             EquippedJoint(
                 joint=item.joint,

@@ -143,6 +143,8 @@ def _apply(args: argparse.Namespace) -> int:
         warn(message)
     for message in _report(done, model):
         warn(message)
+    for message in _half_gains(done, args):
+        warn(message)
     for message in neighbour_contact_warnings(neighbour_contacts(model), [item.joint for item in done]):
         warn(f"{args.model}: {message}")
     if args.format == "json":
@@ -155,6 +157,26 @@ def _apply(args: argparse.Namespace) -> int:
         )
     status(f"wrote {len(done)} drive(s) to {args.output} (reloaded: {len(drives)} drives)")
     return 0
+
+
+def _half_gains(done: list[Any], args: argparse.Namespace) -> list[str]:
+    """One line where --stiffness or --damping alone left joints with the replaced actuators' other gain."""
+    from drive_envelope._src.format import first_few
+
+    if (args.stiffness is None) == (args.damping is None):
+        return []
+    given, other = ("--stiffness", "damping") if args.stiffness is not None else ("--damping", "stiffness")
+    mixed = [item for item in done if ", the other from " in item.gains_from]
+    if not mixed:
+        return []
+    units = {("damping", "revolute"): "N*m*s/rad", ("damping", "prismatic"): "N*s/m"}
+    units |= {("stiffness", "revolute"): "N*m/rad", ("stiffness", "prismatic"): "N/m"}
+    shown = [f"{i.joint} {getattr(i, other):.6g} {units[other, i.envelope.joint]}" for i in mixed]
+    kept = first_few(shown, 3, str)
+    return [
+        f"{given} is given without --{other}: {len(mixed)} joint(s) keep their replaced actuator's "
+        f"{other} ({kept}), tuned for its own gains; give --{other} too to set both"
+    ]
 
 
 def _print_apply_json(done: list[Any], args: argparse.Namespace, reloaded: int) -> None:
