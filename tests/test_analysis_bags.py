@@ -151,6 +151,40 @@ def test_a_bam_log_as_a_bag_reads_as_its_csv(tmp_path: Path, storage: str, comma
     assert ours.duty_per_rad == theirs.duty_per_rad == pytest.approx(0.5754755004452713)
 
 
+def test_a_bags_storage_file_reads_the_bag_folders_sidecar(tmp_path: Path) -> None:
+    """The .mcap inside a bag is the same log as its folder: the same sidecar gain (kp 800 log), not none.
+
+    A new user's replay of ``bags/one/one.mcap`` ran on the stand's own gain, 130 mrad against the
+    folder's 29 mrad, silently. Two sidecars for one log are refused rather than one picked.
+    """
+    csv = next(path for path in _bam_logs() if "10h28m49" in path.name)
+    bag = _bam_bag(tmp_path, csv)
+    (storage,) = bag.glob("*.mcap")
+    options = BagOptions(command_topic="/command")
+    by_folder = read_bench_log(bag, bag=options).duty_per_rad
+    assert read_bench_log(storage, bag=options).duty_per_rad == by_folder == pytest.approx(0.5754755004452713)
+    shutil.copy(bag.with_suffix(".json"), storage.with_suffix(".json"))
+    with pytest.raises(InputError, match=r"two sidecars \(.*10h28m49\.json, .*10h28m49\.json\): keep one"):
+        read_bench_log(storage, bag=options)
+
+
+def test_a_sidecar_named_after_the_whole_log_file_is_read(tmp_path: Path) -> None:
+    """``run.csv.json`` and ``run.csv.gz.json`` are the log's sidecar as ``run.json`` is."""
+    csv = next(path for path in _bam_logs() if "10h28m49" in path.name)
+    for name in ("run.csv", "run.csv.gz"):
+        folder = tmp_path / name.replace(".", "_")
+        folder.mkdir()
+        log = folder / name
+        data = csv.read_bytes()
+        if name.endswith(".gz"):
+            import gzip
+
+            data = gzip.compress(data)
+        log.write_bytes(data)
+        shutil.copy(csv.with_suffix(".json"), folder / f"{name}.json")
+        assert read_bench_log(log).duty_per_rad == pytest.approx(0.5754755004452713)
+
+
 def test_identify_and_replay_of_bags_give_the_csv_numbers(tmp_path: Path) -> None:
     """identify on bags written from BAM logs gives the CSVs' parameters and errors; replay too."""
     pytest.importorskip("scipy")

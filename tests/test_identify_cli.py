@@ -321,7 +321,10 @@ def test_a_log_without_the_duty_gain_the_others_have_is_a_warning(
         "max_effort",
     ]
     err = _warnings(main, argv, capsys)
-    assert f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's" in err
+    assert (
+        f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one; looked for run1.json, "
+        "run1.csv.json): uses the stand's" in err
+    )
     assert str(logs[0]) + ":" not in err  # matching sidecars say nothing
 
 
@@ -333,7 +336,7 @@ def test_a_log_without_the_duty_gain_is_warned_once_even_given_twice(
     _sidecar(logs[0], name="run0", kp_duty_per_rad=2.0)
     argv = ["identify", str(logs[0]), str(logs[1]), "--validate", str(logs[1]), "--stand", str(stand)]
     err = _warnings(main, [*argv, "--fit", "max_effort"], capsys)
-    assert err.count(f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one)") == 1
+    assert err.count(f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one; looked for") == 1
 
 
 def test_replay_warns_a_log_without_the_duty_gain_the_others_have(
@@ -345,8 +348,8 @@ def test_replay_warns_a_log_without_the_duty_gain_the_others_have(
     assert main(["replay", str(logs[0]), str(logs[1]), "--stand", str(stand)]) == 0
     err = capsys.readouterr().err
     line = (
-        f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one): "
-        "uses the stand's servo.duty_per_rad = 1"
+        f"{logs[1]}: no kp_duty_per_rad in a sidecar (other logs have one; looked for run1.json, "
+        "run1.csv.json): uses the stand's servo.duty_per_rad = 1"
     )
     assert err.count(line) == 1
     assert str(logs[0]) + ":" not in err

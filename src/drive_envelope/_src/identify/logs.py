@@ -266,15 +266,31 @@ def _check_magnitudes(columns: Mapping[str, FloatArray], label: str) -> None:
             )
 
 
+def sidecar_candidates(file: Path) -> list[Path]:
+    """Where the log's JSON sidecar may be, in order.
+
+    ``NAME.json`` beside ``NAME.csv``, ``NAME.csv.gz`` or ``NAME.parquet``; the log's whole name with
+    ``.json`` (``NAME.csv.json``, ``NAME.csv.gz.json``); for a bag, ``BAG.json`` beside the bag folder,
+    also when the bag is given by its ``.mcap`` / ``.db3`` file (the same log as its folder).
+    """
+    stem = file.with_suffix("") if file.suffix.lower() == ".gz" else file
+    found = [stem.with_suffix(".json"), file.with_name(file.name + ".json")]
+    if not file.is_dir() and is_bag(file) and (file.parent / "metadata.yaml").is_file():
+        found.append(file.parent.with_suffix(".json"))
+    return list(dict.fromkeys(found))
+
+
 def _sidecar(file: Path) -> dict[str, Any] | None:
-    """The log's JSON sidecar (``NAME.json`` beside ``NAME.csv`` or ``NAME.csv.gz``), or None."""
-    sidecar = (
-        file.with_suffix(".json")
-        if file.suffix.lower() != ".gz"
-        else file.with_suffix("").with_suffix(".json")
-    )
-    if not sidecar.exists() and not sidecar.is_symlink():
+    """The log's JSON sidecar (:func:`sidecar_candidates`), or None; two of them are refused."""
+    present = [path for path in sidecar_candidates(file) if path.exists() or path.is_symlink()]
+    if len(present) > 1:
+        raise InputError(
+            f"{file}: two sidecars ({', '.join(str(p) for p in present)}): keep one, the log's settings "
+            "would depend on which is read"
+        )
+    if not present:
         return None
+    sidecar = present[0]
     text = read_text(sidecar)  # a FIFO, /dev/zero or an oversized file beside the log: refused
     try:
         data: Any = json.loads(text)

@@ -24,7 +24,7 @@ from drive_envelope._src.analysis.log_bag import BagOptions
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.canonical import canonical_envelope
-from drive_envelope._src.identify.logs import BenchLog, read_bench_log
+from drive_envelope._src.identify.logs import BenchLog, read_bench_log, sidecar_candidates
 from drive_envelope._src.identify.optimize import SearchOptions, SearchProgress, SearchResult, search
 from drive_envelope._src.identify.parameters import (
     DEFAULT_FIT,
@@ -404,9 +404,10 @@ def duty_notes(setup: IdentifyStand, logs: Sequence[BenchLog]) -> tuple[str, ...
     """
     if setup.duty_per_rad is None or all(log.duty_per_rad is None for log in logs):
         return ()
-    paths = dict.fromkeys(str(log.path) for log in logs if log.duty_per_rad is None)
+    paths = dict.fromkeys(Path(log.path) for log in logs if log.duty_per_rad is None)
     return tuple(
-        f"{path}: no kp_duty_per_rad in a sidecar (other logs have one): uses the stand's "
+        f"{path}: no kp_duty_per_rad in a sidecar (other logs have one; looked for "
+        f"{', '.join(os.path.relpath(p, path.parent) for p in sidecar_candidates(path))}): uses the stand's "
         f"servo.duty_per_rad = {setup.duty_per_rad:g}"
         for path in paths
     )
