@@ -150,6 +150,15 @@ def test_atomic_write_keeps_mode_and_names_missing_folder(tmp_path: Path) -> Non
             "drive-envelope mujoco show: error: unrecognized arguments: --jsn (--jsn: did you mean --json?)",
         ),
         (["derive", "a", "b"], "drive-envelope derive: error: unrecognized arguments: b (see drive-envelope"),
+        (  # argparse read it as --joint-column (replay's --joint picks a joint): no abbreviations
+            ["check", "e.toml", "log.csv", "--joint", "elbow"],
+            "drive-envelope check: error: unrecognized arguments: --joint elbow (--joint: did you mean "
+            "--joint-column?)",
+        ),
+        (
+            ["check", "e.toml", "log.csv", "--velocity-col", "v"],
+            "unrecognized arguments: --velocity-col v (--velocity-col: did you mean --velocity-column?)",
+        ),
     ],
 )
 def test_bad_flags_are_one_line_with_exit_2(

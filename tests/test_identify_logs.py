@@ -35,6 +35,19 @@ def test_minimal_log_defaults(tmp_path: Path) -> None:
     assert np.all(log.target_velocity == 0.0) and np.all(log.enabled)
 
 
+def test_a_log_sampled_coarser_than_a_drive_can_step_is_a_warning(tmp_path: Path) -> None:
+    """Warn for a time in ms under a bare header (5 s steps); say nothing for the same log with its unit."""
+    rows = "".join(f"{5 * i},0,1\n" for i in range(4))
+    with pytest.warns(StandWarning, match=r"ms\.csv: samples 5 s apart, .*needs its unit in the header"):
+        assert read_bench_log(_write(tmp_path / "ms.csv", "time,position,target_position\n" + rows)).dt == 5.0
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        labelled = read_bench_log(_write(tmp_path / "u.csv", "time [ms],position,target_position\n" + rows))
+        assert labelled.dt == pytest.approx(0.005)
+
+
 def test_columns_any_order_and_case_with_extra_columns(tmp_path: Path) -> None:
     """Find the columns by name, whatever their order and case; ignore the others."""
     text = (

@@ -33,8 +33,14 @@ class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (``PROG CMD: error: ...``) and exit status 2.
 
     argparse prints the whole usage before the error; here the error names the flag and the value,
-    and ``--help`` has the usage. Subcommand parsers inherit the class.
+    and ``--help`` has the usage. Subcommand parsers inherit the class. Flags are never
+    abbreviated: ``check --joint`` was read as ``--joint-column`` while ``replay --joint`` picks a
+    joint, so a prefix is an unknown flag with the nearest one named.
     """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         """Print ``message`` as one line on stderr and exit with status 2."""

@@ -132,8 +132,11 @@ def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespa
     hints = []
     for item in extra:
         if item.startswith("--"):
-            close = difflib.get_close_matches(item.split("=", 1)[0], flags, n=1, cutoff=0.6)
-            hints += [f"{item.split('=', 1)[0]}: did you mean {close[0]}?"] if close else []
+            flag = item.split("=", 1)[0]
+            # a prefix of flags (argparse abbreviations are off: say them in full), else the nearest
+            close = [f for f in flags if f.startswith(flag)][:3]
+            close = close or difflib.get_close_matches(flag, flags, n=1, cutoff=0.6)
+            hints += [f"{flag}: did you mean {' or '.join(close)}?"] if close else []
     hint = f" ({'; '.join(hints)})" if hints else ""
     command.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
 

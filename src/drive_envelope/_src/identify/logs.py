@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,6 +44,7 @@ from drive_envelope._src.analysis.log_bag import BagOptions, is_bag, read_bag
 from drive_envelope._src.analysis.log_csv import csv_rows, parse_cells
 from drive_envelope._src.analysis.log_model import si_arrays
 from drive_envelope._src.errors import InputError
+from drive_envelope._src.identify.stand import StandWarning
 from drive_envelope._src.io.files import read_text
 from drive_envelope._src.io.paths import input_file
 
@@ -131,6 +133,7 @@ def read_bench_log(
     if rows < 3:
         raise InputError(f"{label}: {rows} data rows; expected at least 3 samples")
     _check_grid(columns["time"], label)
+    _check_coarse(columns["time"], label)
     _check_magnitudes(columns, label)
     enable = columns.get("torque_enable")
     if enable is not None and not np.isin(enable, (0.0, 1.0)).all():
@@ -244,6 +247,27 @@ def _check_grid(time: FloatArray, label: str) -> None:
         raise InputError(
             f"{label}: row {row}, column 'time': step {float(steps[off[0]]):.6g} s; expected a uniform grid "
             f"of {dt:.6g} s (+-{100 * _GRID_TOLERANCE:g} %): resample the log"
+        )
+
+
+COARSEST_STEP = 0.1
+"""A log sampled coarser than this [s] draws a warning: the replay steps at the log's own step."""
+
+
+def _check_coarse(time: FloatArray, label: str) -> None:
+    """Warn where the sampling step is coarser than :data:`COARSEST_STEP` (a time in ms read as s).
+
+    A bare ``time`` header is seconds: a servo log in milliseconds read so replayed at 5 s steps
+    (reference and PhysX 643 mrad, MuJoCo diverging to 647 rad), silently.
+    """
+    dt = float(np.median(np.diff(time)))
+    if dt > COARSEST_STEP:
+        warnings.warn(
+            f"{label}: samples {dt:.6g} s apart, and the replay steps at the log's own step: a drive needs "
+            f"steps of {COARSEST_STEP:g} s or less; a time in ms or us needs its unit in the header "
+            "('time [ms]'; a bare 'time' is seconds)",
+            StandWarning,
+            stacklevel=3,
         )
 
 
