@@ -228,6 +228,11 @@ def test_map_file_takes_an_inline_envelope(tmp_path: Path) -> None:
         ('{ max_effort = "12 m/s" }', "key 'max_effort'"),
         ('{ instance = "rotX" }', "expected exactly one of 'envelope' or 'datasheet', or an inline envelope"),
         ("{ max_actuator_velocity = 3 }", "missing required key 'max_effort'"),
+        (  # a slide's numbers without joint = "prismatic" (the default is revolute): say so
+            '{ max_effort = "120 N", max_actuator_velocity = "0.25 m/s" }',
+            "'120 N' is not a torque in N*m (e.g. '2.5 Nm'); its dimension is [mass] * [length] / [time] "
+            '** 2; a prismatic joint\'s envelope says so: add joint = "prismatic"',
+        ),
     ],
 )
 def test_bad_inline_entries_name_the_key(tmp_path: Path, value: str, message: str) -> None:

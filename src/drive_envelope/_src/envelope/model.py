@@ -354,15 +354,32 @@ def envelope_from_mapping(data: Mapping[str, object], *, source: str) -> Perform
             f"{source}: missing required key 'max_effort' "
             f"(the drive's effort cap, {si_unit('max_effort', joint)})"
         )
-    values = {
-        field: read_quantity(data[field], si_unit(field, joint), f"{source}: key {field!r}")
-        for field in ENVELOPE_FIELDS
-        if field in data
-    }
+    try:
+        values = {
+            field: read_quantity(data[field], si_unit(field, joint), f"{source}: key {field!r}")
+            for field in ENVELOPE_FIELDS
+            if field in data
+        }
+    except InputError as exc:
+        if "joint" in data or not _reads_as_prismatic(data):
+            raise
+        # a slide's numbers (N, m/s) under the default joint type: say what is missing
+        raise InputError(f'{exc}; a prismatic joint\'s envelope says so: add joint = "prismatic"') from None
     try:
         return PerformanceEnvelope(joint=joint, name=name, **values)  # type: ignore[arg-type]
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
+
+
+def _reads_as_prismatic(data: Mapping[str, object]) -> bool:
+    """Whether every envelope value of ``data`` reads in the prismatic units (N, m/s, ...)."""
+    try:
+        for field in ENVELOPE_FIELDS:
+            if field in data:
+                read_quantity(data[field], si_unit(field, "prismatic"), field)
+    except InputError:
+        return False
+    return True
 
 
 def _clip_quadrant(env: PerformanceEnvelope, v0: float, tau0: float) -> FloatArray:
