@@ -25,6 +25,7 @@ from drive_envelope._src.datasheet.limits import (
     EFFORT_HINT,
     VELOCITY_HINT,
     binding,
+    continuous_duty_note,
     effort_candidates,
     limit_source,
     value_of,
@@ -89,6 +90,7 @@ def derive(
     velocity = velocity_candidates(ctx)
     effort_by = binding(effort, "max_effort", ctx, EFFORT_HINT)
     velocity_by = binding(velocity, "max_actuator_velocity", ctx, VELOCITY_HINT)
+    ctx.notes.extend(continuous_duty_note(ctx, duty, effort_by))
     # the operating points first: when they are the speed-torque line, its slope is a gradient source
     resistance_value, resistance_method = resistance(ctx)
     gradient, gradient_method_used, reason = choose_gradient(ctx, method, explicit, velocity_by)

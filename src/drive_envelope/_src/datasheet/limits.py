@@ -112,6 +112,35 @@ def _output_effort(ctx: DeriveContext, duty: Duty) -> str:
     return "max_effort"
 
 
+_NOT_CONTINUOUS = {
+    "controller_current": ("controller.max_current", "a peak current"),
+    "gear_torque": ("gear.max_torque", "the gear's maximum"),
+    "output_stall": ("output.stall_effort", "a peak rating"),
+}
+"""Effort candidates whose input is no continuous rating: they cap continuous duty too (the controller
+never gives more current), so they stay candidates, and a note names the one that binds."""
+
+
+def continuous_duty_note(ctx: DeriveContext, duty: Duty, effort_by: str) -> list[str]:
+    """The note when a continuous-duty max_effort comes from a peak rating (see :data:`_NOT_CONTINUOUS`).
+
+    ``output.max_effort`` taken for want of ``output.nominal_effort`` has its own note.
+    """
+    if duty != "continuous" or effort_by not in _NOT_CONTINUOUS:
+        return []
+    key, kind = _NOT_CONTINUOUS[effort_by]
+    motor, output = ctx.sheet.motor, ctx.sheet.output
+    rated = (motor is not None and motor.continuous_torque is not None) or (
+        output is not None and output.nominal_effort is not None
+    )
+    why = (
+        "it binds below the continuous rating"
+        if rated
+        else "no continuous rating is given (motor.continuous_torque or output.nominal_effort)"
+    )
+    return [f"{key} ({kind}) is used for continuous duty: max_effort is limited by {effort_by}, as {why}"]
+
+
 def _output_rating(name: str, output: OutputRating | None, field: str, unit: str) -> Candidate:
     """The candidate that is the [output] table's ``field`` itself (a joint-side rating)."""
     value = getattr(output, field) if output is not None else None

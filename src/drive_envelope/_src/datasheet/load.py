@@ -14,6 +14,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+from drive_envelope._src.datasheet.marks import bare_numbers, current_conventions
+from drive_envelope._src.datasheet.pairs import check_pairs
 from drive_envelope._src.datasheet.spec import (
     GRADIENT_METHODS,
     ControllerSpec,
@@ -122,14 +124,17 @@ def datasheet_from_mapping(
     """Validate a datasheet mapping (see :func:`load_datasheet`) and convert it to SI."""
     merged, provenance = _apply_overrides(data, overrides or {}, source)
     _check_top_level(merged, source)
+    overridden = frozenset(overrides or {})
     name = merged.get("name")
     if name is None:
         raise InputError(f"{source}: missing required key 'name' (the actuator's name)")
     if not isinstance(name, str) or not name.strip():
-        raise InputError(f"{source}: key 'name': expected a non-empty string, got {name!r}")
+        where = _where(source, "name", overridden)
+        raise InputError(f"{where}: expected a non-empty string, got {name!r}")
     joint = merged.get("joint", "revolute")
     if joint not in ("revolute", "prismatic"):
-        raise InputError(f"{source}: key 'joint': expected 'revolute' or 'prismatic', got {joint!r}")
+        where = _where(source, "joint", overridden)
+        raise InputError(f"{where}: expected 'revolute' or 'prismatic', got {joint!r}")
     if "screw" in merged and joint != "prismatic":
         raise InputError(
             f'{source}: section [screw]: a screw needs joint = "prismatic", got joint = {joint!r}'
@@ -137,13 +142,15 @@ def datasheet_from_mapping(
     units = _LINEAR if joint == "prismatic" and "screw" not in merged else _ROTARY
     joint_units = _LINEAR if joint == "prismatic" else _ROTARY
     notes: list[str] = []
-    context = _Reading(units=units, joint_units=joint_units, joint=joint, source=source, notes=notes)
+    context = _Reading(
+        units=units, joint_units=joint_units, joint=joint, source=source, notes=notes, overridden=overridden
+    )
     sections = {
         section: _read_motor_side(merged[section], section, context)
         for section in DATASHEET_SECTIONS
         if section in merged
     }
-    _check_pairs(sections, source)
+    check_pairs(sections, source)
     for section, values in sections.items():
         for key in values:
             provenance.setdefault(f"{section}.{key}", "datasheet")
@@ -161,26 +168,9 @@ def datasheet_from_mapping(
         source=source,
         provenance=provenance,
         notes=tuple(notes),
-        current_conventions=_current_conventions(merged),
+        current_conventions=current_conventions(merged),
+        bare_numbers=bare_numbers(merged, DATASHEET_SECTIONS, KEY_ALIASES),
     )
-
-
-_RMS = re.compile(r"A\s*\(?\s*(?:rms|RMS)\b")
-_PEAK = re.compile(r"A\s*\(?\s*(?:pk|PK|peak)\b")
-
-
-def _current_conventions(merged: Mapping[str, Any]) -> dict[str, str]:
-    """Which current-carrying values were marked rms or peak in their text (see ``Datasheet``)."""
-    found = {}
-    for section, key in (("motor", "torque_constant"), ("controller", "max_current")):
-        table = merged.get(section)
-        raw = table.get(key) if isinstance(table, Mapping) else None
-        if isinstance(raw, str):
-            if _RMS.search(raw):
-                found[f"{section}.{key}"] = "rms"
-            elif _PEAK.search(raw):
-                found[f"{section}.{key}"] = "peak"
-    return found
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -197,6 +187,14 @@ class _Reading:
     """File or catalog name, for messages."""
     notes: list[str]
     """Collects how ambiguous spellings were read."""
+    overridden: frozenset[str] = frozenset()
+    """``"section.key"`` (as written) of each value set with an override (``derive --set``)."""
+
+
+def _where(source: str, dotted: str, overridden: frozenset[str]) -> str:
+    """The start of a message about key ``dotted``: the override that set it, else the file's key."""
+    # a bad --set value is the command line's mistake, not the file's: say so as an unknown key does
+    return f"override {dotted!r}" if dotted in overridden else f"{source}: key {dotted!r}"
 
 
 def _read_motor_side(table: Any, section: str, context: _Reading) -> dict[str, Any]:
@@ -207,7 +205,12 @@ def _read_motor_side(table: Any, section: str, context: _Reading) -> dict[str, A
         if context.units is not _LINEAR or context.joint_units is not _LINEAR:
             raise
         rotary = _Reading(
-            units=_ROTARY, joint_units=_LINEAR, joint=context.joint, source=context.source, notes=[]
+            units=_ROTARY,
+            joint_units=_LINEAR,
+            joint=context.joint,
+            source=context.source,
+            notes=[],
+            overridden=context.overridden,
         )
         try:
             _read_section(table, section, rotary)
@@ -304,9 +307,9 @@ def _read_section(table: object, section: str, reading: _Reading) -> dict[str, A
             )
         if key in _ALIAS_JOINT and _ALIAS_JOINT[key] != reading.joint:
             other = "stall_force" if reading.joint == "prismatic" else "stall_torque"
+            where = _where(source, f"{section}.{key}", reading.overridden)
             raise InputError(
-                f"{source}: key {f'{section}.{key}'!r}: a {reading.joint} joint has a {other} "
-                f"(or write {section}.{canonical})"
+                f"{where}: a {reading.joint} joint has a {other} (or write {section}.{canonical})"
             )
         written[canonical] = str(key)
     required = _REQUIRED.get(section)
@@ -316,7 +319,7 @@ def _read_section(table: object, section: str, reading: _Reading) -> dict[str, A
     for key, name in written.items():
         raw = table[name]
         kind, rule, side = spec[key]
-        where = f"{source}: key {f'{section}.{name}'!r}"
+        where = _where(source, f"{section}.{name}", reading.overridden)
         if kind == "enum":
             values[key] = _read_enum(raw, where)
         elif kind == "points":
@@ -340,9 +343,10 @@ def _read_value(
     reading: _Reading,
     key: tuple[str, str],
 ) -> float:
+    dotted = repr(f"{key[0]}.{key[1]}")
     try:
         if kind == "ratio" and isinstance(raw, str) and ":" in raw:
-            value = _read_ratio(raw, where, reading.notes)
+            value = _read_ratio(raw, where, dotted, reading.notes)
         elif kind == "lead":
             value = _read_lead(raw, where)
         else:
@@ -350,6 +354,16 @@ def _read_value(
     except UnitsError as exc:
         raise UnitsError(f"{exc}{_neighbour_hint(raw, key, reading)}") from None
     _check_rule(value, raw, rule, where)
+    if kind == "ratio" and value < 1.0 and not (isinstance(raw, str) and ":" in raw):
+        # accepted (a speed-up gear is valid), but on a robot joint it is far more often a reduction
+        # typed inverted (joint speed / motor speed); "1:6" gets its note in _read_ratio
+        shown = repr(raw) if isinstance(raw, str) else f"{value:g}"
+        reduction = 1.0 / value
+        reading.notes.append(
+            f"{dotted} = {shown} is below 1: read as a speed-up gear, the joint turning {reduction:g} times "
+            f"as fast as the motor (i_G = motor speed / output speed); write a reduction above 1, e.g. "
+            f'{reduction:g} or "{reduction:g}:1"'
+        )
     return value
 
 
@@ -371,7 +385,7 @@ def _neighbour_hint(raw: object, key: tuple[str, str], reading: _Reading) -> str
     return ""
 
 
-def _read_ratio(raw: str, where: str, notes: list[str]) -> float:
+def _read_ratio(raw: str, where: str, dotted: str, notes: list[str]) -> float:
     """Read a ratio printed as ``"6:1"`` (motor turns : output turns); ``"1:50"`` is a reduction of 50."""
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*:\s*([0-9]*\.?[0-9]+)\s*", raw)
     try:
@@ -387,7 +401,7 @@ def _read_ratio(raw: str, where: str, notes: list[str]) -> float:
         # vendors print reductions both ways ("1:50" and "50:1"); a speed-up gear is rare and must
         # be written as a plain number, so the smaller-first spelling is read as a reduction
         notes.append(
-            f"{where.split(': key ')[-1]} = {raw!r} read as a reduction of {second / first:g} "
+            f"{dotted} = {raw!r} read as a reduction of {second / first:g} "
             f"(i_G = motor speed / output speed); write a speed-up gear as a number, e.g. {first / second:g}"
         )
         return second / first
@@ -442,64 +456,3 @@ def _read_points(raw: object, units: dict[str, str], where: str) -> tuple[tuple[
         _check_rule(torque, pair[1], ">=0", f"{where}: point {index} torque")
         points.append((speed, torque))
     return tuple(points)
-
-
-def _check_pairs(sections: Mapping[str, dict[str, Any]], source: str) -> None:
-    """Refuse keys that say the same thing twice, and inconsistent pairs."""
-    motor, output = sections.get("motor", {}), sections.get("output", {})
-    if "speed_constant" in motor and "back_emf_constant" in motor:
-        raise InputError(
-            f"{source}: keys 'motor.speed_constant' and 'motor.back_emf_constant' both given; "
-            "they say the same thing (k_v = 1/k_e): keep one"
-        )
-    if "velocity_at_max_effort" in output and "speed_effort_gradient" in output:
-        raise InputError(
-            f"{source}: keys 'output.velocity_at_max_effort' and 'output.speed_effort_gradient' both given; "
-            "they say the same thing: keep one"
-        )
-    if (
-        "velocity_dependent_resistance" in sections.get("losses", {})
-        and "velocity_dependent_resistance" in output
-    ):
-        raise InputError(
-            f"{source}: 'velocity_dependent_resistance' given in both [losses] and [output]: keep one"
-        )
-    if "velocity_at_max_effort" in output:
-        if "max_effort" not in output or "max_velocity" not in output:
-            raise InputError(
-                f"{source}: key 'output.velocity_at_max_effort' needs "
-                "'output.max_effort' and 'output.max_velocity'"
-            )
-        if output["velocity_at_max_effort"] > output["max_velocity"]:
-            raise InputError(
-                f"{source}: key 'output.velocity_at_max_effort': "
-                f"{output['velocity_at_max_effort']:g} exceeds "
-                f"'output.max_velocity' {output['max_velocity']:g} (SI)"
-            )
-    _check_output_line(output, source)
-    if (
-        "no_load_speed" in motor
-        and "nominal_speed" in motor
-        and not motor["no_load_speed"] > motor["nominal_speed"]
-    ):
-        raise InputError(
-            f"{source}: key 'motor.no_load_speed': {motor['no_load_speed']:g} must exceed "
-            f"'motor.nominal_speed' {motor['nominal_speed']:g} (SI)"
-        )
-
-
-def _check_output_line(output: Mapping[str, Any], source: str) -> None:
-    """The nominal point needs the no-load speed and its effort, and lies below the no-load speed."""
-    if "nominal_velocity" not in output:
-        return
-    for needed in ("nominal_effort", "no_load_velocity"):
-        if needed not in output:
-            raise InputError(
-                f"{source}: key 'output.nominal_velocity' needs 'output.{needed}' "
-                "(a point on the speed-effort line through the no-load speed)"
-            )
-    if not output["nominal_velocity"] < output["no_load_velocity"]:
-        raise InputError(
-            f"{source}: key 'output.nominal_velocity': {output['nominal_velocity']:g} must be below "
-            f"'output.no_load_velocity' {output['no_load_velocity']:g} (SI)"
-        )

@@ -42,8 +42,27 @@ def resolve_envelope(
     Raises:
         InputError: the file or name cannot be read, or the datasheet gives no envelope.
     """
+    return resolve_with_warnings(spec, base=base, duty=duty, where=where)[0]
+
+
+def resolve_with_warnings(
+    spec: EnvelopeLike,
+    *,
+    base: str | os.PathLike[str] | None = None,
+    duty: str = "peak",
+    where: str = "",
+) -> tuple[PerformanceEnvelope, tuple[str, ...]]:
+    """:func:`resolve_envelope`, with the warnings ``derive`` prints when ``spec`` is a datasheet.
+
+    Returns:
+        The envelope and the derivation's unit-slip warnings (one line each; none for an envelope
+        or an envelope file, which are not derived).
+
+    Raises:
+        InputError: as :func:`resolve_envelope`.
+    """
     if isinstance(spec, PerformanceEnvelope):
-        return spec
+        return spec, ()
     try:
         return _resolve(spec, base, duty)
     except InputError as exc:
@@ -52,7 +71,27 @@ def resolve_envelope(
         raise InputError(f"{where}: {exc}") from None
 
 
-def _resolve(spec: object, base: str | os.PathLike[str] | None, duty: str) -> PerformanceEnvelope:
+def datasheet_warnings(spec: str) -> tuple[str, ...]:
+    """The warnings ``derive`` prints for ``spec`` when it names a datasheet file or a catalog actuator.
+
+    For a command that has resolved ``spec`` by a route of its own (``plot`` also reads a scenario
+    file's envelope): anything that is not a datasheet gives none. The file is read a second time.
+
+    Raises:
+        InputError: as :func:`resolve_envelope`, for a ``spec`` it would refuse.
+    """
+    from drive_envelope._src.datasheet.load import is_datasheet_mapping
+    from drive_envelope._src.io.files import read_mapping
+
+    path = _find_file(spec, None)
+    if path is not None and not is_datasheet_mapping(read_mapping(path)):
+        return ()  # an envelope file or a scenario: nothing is derived, so nothing to warn about
+    return resolve_with_warnings(spec)[1]
+
+
+def _resolve(
+    spec: object, base: str | os.PathLike[str] | None, duty: str
+) -> tuple[PerformanceEnvelope, tuple[str, ...]]:
     from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
     from drive_envelope._src.datasheet.derive import derive
     from drive_envelope._src.datasheet.load import datasheet_from_mapping, is_datasheet_mapping
@@ -70,12 +109,13 @@ def _resolve(spec: object, base: str | os.PathLike[str] | None, duty: str) -> Pe
     if path is not None:
         data = read_mapping(path)
         if not is_datasheet_mapping(data):
-            return envelope_from_mapping(data, source=str(path))
+            return envelope_from_mapping(data, source=str(path)), ()
         sheet = datasheet_from_mapping(data, source=str(path))
     else:
         refuse_missing_file(os.fspath(spec))
         sheet = load_catalog_datasheet(os.fspath(spec))
-    return derive(sheet, duty="peak" if duty == "peak" else "continuous").envelope
+    derivation = derive(sheet, duty="peak" if duty == "peak" else "continuous")
+    return derivation.envelope, derivation.warnings
 
 
 def refuse_missing_file(spec: str) -> None:

@@ -234,6 +234,10 @@ class Datasheet:
     """``"motor.torque_constant"`` or ``"controller.max_current"`` -> ``"rms"`` or ``"peak"``, as the
     value's text marked it (``"1.22 N.m/Arms"``, ``"23Apk"``); the units layer reads both as plain
     amperes, so a derivation checks that they match."""
+    bare_numbers: frozenset[str] = frozenset()
+    """``"section.key"`` of each value written as a bare number, without a unit (``torque_constant =
+    91``): read as SI, it may be a vendor's ``mNm/A`` typed without its unit, which a derivation
+    checks for."""
 
     @property
     def linear_motor(self) -> bool:

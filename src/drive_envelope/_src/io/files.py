@@ -24,6 +24,7 @@ from typing import Any, ClassVar
 
 from drive_envelope._src.errors import InputError
 from drive_envelope._src.io.paths import read_input_bytes
+from drive_envelope._src.io.toml_names import named_duplicate
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -94,7 +95,8 @@ def read_mapping(path: str | os.PathLike[str]) -> dict[str, Any]:
         where = f" (line {exc.line})" if exc.line is not None else ""
         raise InputError(f"{file}: duplicate key {exc.key!r}{where}: each key may be written once") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{file}: malformed TOML: {exc}") from None
+        named = named_duplicate(Path(file), text, str(exc))
+        raise InputError(named or f"{file}: malformed TOML: {exc}") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{file}: malformed JSON: {exc}") from None
     except InputError:

@@ -23,15 +23,18 @@ def register(subparsers: Any) -> None:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from drive_envelope._src.datasheet.resolve import resolve_envelope
+    from drive_envelope._src.cli.common import warn
+    from drive_envelope._src.datasheet.resolve import resolve_with_warnings
     from drive_envelope._src.io.envelope_file import envelope_table, envelope_to_json, envelope_to_toml
 
     # as plot, check and simulate read an envelope: a datasheet said "unknown key 'description'"
-    envelope = resolve_envelope(args.file)
+    envelope, slips = resolve_with_warnings(args.file)
     if args.format == "json":
         print(envelope_to_json(envelope), end="")
     elif args.format == "toml":
         print(envelope_to_toml(envelope), end="")
     else:
         print(envelope_table(envelope))
+    for line in slips:  # derive's unit-slip warnings for the same datasheet, on stderr as derive has them
+        warn(line)
     return 0

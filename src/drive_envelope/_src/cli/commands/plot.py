@@ -64,6 +64,7 @@ def _run(args: argparse.Namespace) -> int:
     import warnings
 
     from drive_envelope._src.cli.common import checked_output, print_json, status, warn
+    from drive_envelope._src.datasheet.resolve import datasheet_warnings
     from drive_envelope._src.plots.figure import check_figure_path, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
 
@@ -71,6 +72,9 @@ def _run(args: argparse.Namespace) -> int:
     assert output is not None  # required
     check_figure_path(output)
     envelope = envelope_from_argument(args.envelope)
+    slips = datasheet_warnings(args.envelope)
+    for line in slips:  # derive's unit-slip warnings for a datasheet, on stderr as derive prints them
+        warn(line)
     _check_plottable(envelope, args.envelope)
     from drive_envelope._src.analysis.log_model import LogColumns
 
@@ -98,7 +102,7 @@ def _run(args: argparse.Namespace) -> int:
                 for path, p in zip(args.trajectory, points, strict=True)
             ],
             "dpi": args.dpi,
-            "warnings": list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught)),
+            "warnings": [*slips, *dict.fromkeys(" ".join(str(w.message).split()) for w in caught)],
         }
         print_json(report, ensure_ascii=False)
         return 0
