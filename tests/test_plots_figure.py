@@ -118,6 +118,26 @@ def test_plot_command_writes_each_format(tmp_path: Path, suffix: str) -> None:
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
+def test_plot_reads_a_parquet_bench_log_as_check_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Units in Parquet headers and any case, as check reads them (only simulate's Parquet went there)."""
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    log = tmp_path / "bench.parquet"
+    pq.write_table(
+        pa.table({"Velocity [rpm]": [0.0, 60.0, 120.0], "Effort [mNm]": [500.0, 400.0, 300.0]}), log
+    )
+    figure = tmp_path / "bench.png"
+    code, out, err = run_cli(
+        ["plot", str(EXAMPLES / "envelopes" / "demo.toml"), "-t", str(log), "-o", str(figure), "--json"],
+        capsys,
+    )
+    assert code == 0, err
+    assert json.loads(out)["trajectories"] == [{"file": str(log), "label": "bench", "samples": 3}]
+
+
 def test_plot_command_reads_envelope_files(tmp_path: Path) -> None:
     """An envelope file is plotted without a trajectory."""
     figure = tmp_path / "env.png"

@@ -123,10 +123,19 @@ def _points(path: str, columns: Any) -> Any:
     from drive_envelope._src.plots.curve import OperatingPoints
     from drive_envelope._src.plots.figure import plain_text
 
-    if Path(path).suffix.lower() in (".json", ".parquet", ".pq") and columns == LogColumns():
+    suffix = Path(path).suffix.lower()
+    run = None
+    if suffix in (".json", ".parquet", ".pq") and columns == LogColumns():
+        from drive_envelope._src.errors import InputError
         from drive_envelope._src.scenario.trajectory import read_operating_log
 
-        run = read_operating_log(path)
+        try:
+            run = read_operating_log(path)
+        except InputError:
+            if suffix == ".json":
+                raise
+            # not simulate's Parquet (a bench log: units in headers, any case): check's reader below
+    if run is not None:
         label = f"{run.name} ({run.engine})" if run.engine else run.name
         velocity, effort, time = run.velocity, run.effort, run.time
     else:
