@@ -313,3 +313,17 @@ def test_a_bad_override_value_names_the_override(tmp_path: Path, capsys: pytest.
     path.write_text('name = "x"\n[output]\nno_load_velocity = "50 Hz"\n', encoding="utf-8")
     code, _, err = _run(capsys, "derive", str(path))
     assert code == 2 and f"{path}: key 'output.no_load_velocity': '50 Hz'" in err
+
+
+def test_operating_points_rising_from_zero_effort_are_not_a_no_load_speed(tmp_path: Path) -> None:
+    """1 oz-in at 100 rpm rising to 100 oz-in at 2000 rpm: said to rise, not to fall to zero at 100 rpm."""
+    path = tmp_path / "rising.toml"
+    path.write_text(
+        'name = "x"\n[motor]\nmax_torque = "145 oz-in"\nmax_speed = "2628 RPM"\n[losses]\n'
+        'operating_points = [["100 RPM", "1 oz-in"], ["2000 RPM", "100 oz-in"]]\n',
+        encoding="utf-8",
+    )
+    result = derive(load_datasheet(path))
+    assert any(note.startswith("operating points rise with speed (fitted slope") for note in result.notes)
+    assert not any("fall to zero effort" in note for note in result.notes)
+    assert result.envelope.velocity_dependent_resistance == 0.0

@@ -95,7 +95,8 @@ def _fitted(ctx: DeriveContext, points: tuple[tuple[float, float], ...]) -> tupl
     intercept = float(efforts.mean() - slope * speeds.mean())
     speed_unit = ctx.units["joint_speed"]
     top = float(np.max(efforts))
-    no_load = bool(np.any((efforts <= _ZERO_EFFORT * top) & (speeds > 0.0)))
+    # a point at zero effort is a no-load speed only on a falling curve (a rising one starts there)
+    no_load = slope < 0.0 and bool(np.any((efforts <= _ZERO_EFFORT * top) & (speeds > 0.0)))
     reaches_zero = slope < 0.0 and -intercept / slope <= _REACH * float(np.max(speeds))
     if no_load or reaches_zero:
         zero_at = float(speeds[np.argmin(efforts)]) if no_load else -intercept / slope
