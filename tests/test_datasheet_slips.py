@@ -327,3 +327,18 @@ def test_operating_points_rising_from_zero_effort_are_not_a_no_load_speed(tmp_pa
     assert any(note.startswith("operating points rise with speed (fitted slope") for note in result.notes)
     assert not any("fall to zero effort" in note for note in result.notes)
     assert result.envelope.velocity_dependent_resistance == 0.0
+
+
+def test_a_resistance_that_zeroes_the_effort_below_the_speed_limit_is_noted(tmp_path: Path) -> None:
+    """8 N*m and R = 5 N*m*s/rad reach zero effort at 8 / 5 = 1.6 rad/s, below the 10 rad/s limit."""
+    path = tmp_path / "resistance.toml"
+    path.write_text(
+        'name = "x"\n[output]\nmax_effort = "8 N*m"\nmax_velocity = "10 rad/s"\n'
+        "velocity_dependent_resistance = 5\n",
+        encoding="utf-8",
+    )
+    notes = derive(load_datasheet(path)).notes
+    assert (
+        "the effort line reaches zero effort at 1.6 rad/s (max_effort / velocity_dependent_resistance), "
+        "below max_actuator_velocity = 10 rad/s: no operating point reaches max_actuator_velocity"
+    ) in notes

@@ -133,6 +133,8 @@ def _envelope_notes(
 
     * The speed line reaches zero speed below max_effort (``v_max / G < max_effort``): no operating
       point reaches max_effort; the line decides the stall effort.
+    * The effort line reaches zero effort below max_actuator_velocity (``max_effort / R < v_max``):
+      no operating point reaches that speed; the resistance decides the no-load speed.
     * The voltage limit binds only because of the default modulation mu_C = 0.9, below a printed
       speed (an output rating or no-load speed).
     """
@@ -145,6 +147,14 @@ def _envelope_notes(
             f"the speed line reaches zero speed at {stall:.6g} {unit} (max_actuator_velocity / "
             f"speed_effort_gradient), below max_effort = {envelope.max_effort:.6g} {unit}: no operating "
             "point reaches max_effort"
+        )
+    resistance = envelope.velocity_dependent_resistance
+    if resistance > 0.0 and envelope.max_effort / resistance < top:
+        speed_unit = ctx.units["joint_speed"]
+        notes.append(
+            f"the effort line reaches zero effort at {envelope.max_effort / resistance:.6g} {speed_unit} "
+            f"(max_effort / velocity_dependent_resistance), below max_actuator_velocity = {top:.6g} "
+            f"{speed_unit}: no operating point reaches max_actuator_velocity"
         )
     if velocity_by == "voltage" and ctx.provenance.get("controller.modulation") == "default":
         printed = [c for c in velocity if c.name.startswith("output") and c.value is not None]
