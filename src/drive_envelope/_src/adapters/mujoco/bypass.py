@@ -9,13 +9,12 @@ keyframe: the joints of the DOFs with a nonzero moment in any of these configura
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from drive_envelope._src.adapters.mujoco.existing import compiled_gain_kind
-from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
+from drive_envelope._src.adapters.mujoco.mjcf import model_poses
 
 if TYPE_CHECKING:
     import mujoco
@@ -61,28 +60,20 @@ def _transmission(model: mujoco.MjModel, i: int) -> str:
 
 def _reached_dofs(model: mujoco.MjModel, actuators: Sequence[int]) -> dict[int, set[int]]:
     """Actuator -> the DOFs with a nonzero moment at ``qpos0`` or at any keyframe."""
-    import mujoco
-
     reached: dict[int, set[int]] = {i: set() for i in actuators}
     if not actuators:
         return reached
-    with warnings.catch_warnings(), mujoco_warnings():
-        warnings.simplefilter("ignore")  # the plugin's own warnings were given when it compiled
-        data = mujoco.MjData(model)
-        for key in range(-1, model.nkey):
-            if key >= 0:
-                mujoco.mj_resetDataKeyframe(model, data, key)
-            mujoco.mj_fwdPosition(model, data)
-            for i in actuators:
-                for out in range(
-                    int(model.actuator_outadr[i]), int(model.actuator_outadr[i] + model.actuator_outnum[i])
-                ):
-                    start, count = int(data.moment_rowadr[out]), int(data.moment_rownnz[out])
-                    values = data.actuator_moment[start : start + count]
-                    scale = float(abs(values).max()) if count else 0.0
-                    for k in range(count):
-                        if scale > 0 and abs(float(values[k])) > _RELATIVE_ZERO * scale:
-                            reached[i].add(int(data.moment_colind[start + k]))
+    for _key, data in model_poses(model):
+        for i in actuators:
+            for out in range(
+                int(model.actuator_outadr[i]), int(model.actuator_outadr[i] + model.actuator_outnum[i])
+            ):
+                start, count = int(data.moment_rowadr[out]), int(data.moment_rownnz[out])
+                values = data.actuator_moment[start : start + count]
+                scale = float(abs(values).max()) if count else 0.0
+                for k in range(count):
+                    if scale > 0 and abs(float(values[k])) > _RELATIVE_ZERO * scale:
+                        reached[i].add(int(data.moment_colind[start + k]))
     return reached
 
 

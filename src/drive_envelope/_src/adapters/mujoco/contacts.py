@@ -10,12 +10,11 @@ and at every keyframe (``mj_forward``), as the bypass check reads transmissions.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from drive_envelope._src.adapters.mujoco.mjcf import mujoco_warnings
+from drive_envelope._src.adapters.mujoco.mjcf import model_poses
 
 if TYPE_CHECKING:
     import mujoco
@@ -80,28 +79,20 @@ def neighbour_contacts(model: mujoco.MjModel) -> list[NeighbourContact]:
     Args:
         model: The compiled model (contacts disabled in ``opt.disableflags``: none are found).
     """
-    import mujoco
-
     seen: dict[tuple[int, int], _Seen] = {}
-    with warnings.catch_warnings(), mujoco_warnings():
-        warnings.simplefilter("ignore")  # the plugin's own warnings were given when it compiled
-        data = mujoco.MjData(model)
-        for key in range(-1, model.nkey):
-            if key >= 0:
-                mujoco.mj_resetDataKeyframe(model, data, key)
-            mujoco.mj_fwdPosition(model, data)
-            counts: dict[tuple[int, int], int] = {}
-            for contact in data.contact[: data.ncon]:
-                bodies = (int(model.geom_bodyid[contact.geom1]), int(model.geom_bodyid[contact.geom2]))
-                pair = _neighbours(model, *bodies)
-                if pair is None or not contact.dist < 0:
-                    continue
-                counts[pair] = counts.get(pair, 0) + 1
-                item = seen.setdefault(pair, _Seen())
-                item.depth = max(item.depth, -float(contact.dist))
-            for pair, count in counts.items():
-                seen[pair].poses.append(_pose_label(model, key))
-                seen[pair].contacts = max(seen[pair].contacts, count)
+    for key, data in model_poses(model):
+        counts: dict[tuple[int, int], int] = {}
+        for contact in data.contact[: data.ncon]:
+            bodies = (int(model.geom_bodyid[contact.geom1]), int(model.geom_bodyid[contact.geom2]))
+            pair = _neighbours(model, *bodies)
+            if pair is None or not contact.dist < 0:
+                continue
+            counts[pair] = counts.get(pair, 0) + 1
+            item = seen.setdefault(pair, _Seen())
+            item.depth = max(item.depth, -float(contact.dist))
+        for pair, count in counts.items():
+            seen[pair].poses.append(_pose_label(model, key))
+            seen[pair].contacts = max(seen[pair].contacts, count)
     return [_contact(model, pair, item) for pair, item in seen.items()]
 
 

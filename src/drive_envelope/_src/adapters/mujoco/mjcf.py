@@ -116,6 +116,24 @@ def mujoco_warnings(handler: Callable[[str], None] | None = None) -> Iterator[No
         mujoco.set_mju_user_warning(previous)
 
 
+def model_poses(model: Any) -> Iterator[tuple[int, Any]]:
+    """``(key, data)`` at ``qpos0`` (key -1) and at each keyframe, after ``mj_fwdPosition``.
+
+    The checks that read what the model does in its own poses (transmissions, contacts) share it;
+    MuJoCo's warnings are dropped meanwhile (the plugin's were given when the model compiled).
+    """
+    import mujoco
+
+    with warnings.catch_warnings(), mujoco_warnings():
+        warnings.simplefilter("ignore")
+        data = mujoco.MjData(model)
+        for key in range(-1, model.nkey):
+            if key >= 0:
+                mujoco.mj_resetDataKeyframe(model, data, key)
+            mujoco.mj_fwdPosition(model, data)
+            yield key, data
+
+
 def _load_plugin_if_used(text: str) -> None:
     """Load the plugin; a model that does not use it compiles without it."""
     from drive_envelope._src.adapters.mujoco.build import PluginError
