@@ -44,6 +44,22 @@ def test_search_matches_all_words_case_insensitively(capsys: pytest.CaptureFixtu
     assert not any(k.startswith(("unitree-go", "unitree-h1")) for k in keys)
 
 
+def test_search_words_match_at_the_start_of_a_word(capsys: pytest.CaptureFixture[str]) -> None:
+    """'tech' finds no FEETECH servo (inside a word), 'feetech' all of them, 'ak80-6' the AK80-6.
+
+    A new user's --search "EC 45" (a maxon motor) listed Damiao's 2EC, FEETECH and Magmotor entries.
+    """
+
+    def keys(query: str) -> set[str]:
+        code, out, _ = run(capsys, "catalog", "--search", query, "--json")
+        return {item["key"] for item in json.loads(out)["actuators"]} if code == 0 else set()
+
+    feetech = {p.stem for p in CATALOG.glob("feetech-*.toml")}
+    assert feetech and feetech <= keys("feetech") and not feetech & keys("tech")
+    assert "tmotor-ak80-6" in keys("ak80-6")
+    assert keys("EC 45") == set()
+
+
 def test_search_unitree_finds_every_unitree_entry(capsys: pytest.CaptureFixture[str]) -> None:
     """--search unitree: the entries whose key starts with unitree- (and only Unitree's)."""
     code, out, _ = run(capsys, "catalog", "--search", "unitree")

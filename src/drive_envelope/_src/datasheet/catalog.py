@@ -67,7 +67,8 @@ def catalog_entries(*, joint: str | None = None, search: str | None = None) -> l
     Args:
         joint: Only ``"revolute"`` or only ``"prismatic"`` actuators.
         search: Words that must all appear (case-insensitive) in the key, name, description or
-            source URLs, e.g. ``"unitree"`` or ``"dynamixel 12 v"``.
+            source URLs, each at the start of a word there (``"ec 45"`` is not in "FEETECH" or
+            "2EC"), e.g. ``"unitree"`` or ``"dynamixel 12 v"``.
 
     Raises:
         InputError: ``joint`` is not ``revolute`` or ``prismatic``.
@@ -84,9 +85,14 @@ def catalog_entries(*, joint: str | None = None, search: str | None = None) -> l
         if joint is not None and entry.joint != joint:
             continue
         text = " ".join([entry.key, entry.name, entry.description, *entry.sources]).lower()
-        if all(word in text for word in words):
+        if all(_holds(text, word) for word in words):
             entries.append(entry)
     return entries
+
+
+def _holds(text: str, word: str) -> bool:
+    """Whether ``word`` starts somewhere in ``text`` after a character that is not a letter or digit."""
+    return re.search(r"(?<![a-z0-9])" + re.escape(word), text) is not None
 
 
 def no_match_error(search: str | None, joint: str | None = None) -> InputError:
@@ -103,7 +109,7 @@ def no_match_error(search: str | None, joint: str | None = None) -> InputError:
     vocabulary = sorted(
         {w for e in entries for w in re.split(r"[^a-z0-9.]+", f"{e.key} {e.name}".lower()) if w}
     )
-    absent = [word for word in words if not any(word in text for text in texts)]
+    absent = [word for word in words if not any(_holds(text, word) for text in texts)]
     corrected = [
         next(iter(difflib.get_close_matches(word, vocabulary, 1, 0.6)), "") if word in absent else word
         for word in words
