@@ -283,6 +283,18 @@ def test_a_sidecar_copied_from_another_log_is_a_warning(
     assert "(its kp_duty_per_rad is used as it is; the pendulum is the stand's)" in err
 
 
+def test_replay_warns_about_sidecars_as_identify_does(
+    main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A copied sidecar and a pendulum that differs from the stand's: replay said nothing of either."""
+    stand, logs = bench
+    _sidecar(logs[0], name="2026-01-15_10h30m10", mass_kg=1.5, length_m=0.1)
+    assert main(["replay", str(logs[0]), "--stand", str(stand)]) == 0
+    err = capsys.readouterr().err
+    assert f"{logs[0]}: its sidecar names the log '2026-01-15_10h30m10': a sidecar copied" in err
+    assert "its sidecar gives mass_kg = 1.5 but" in err and "the replay uses the stand's 0.49" in err
+
+
 def test_a_sidecar_bench_that_differs_from_the_stand_is_a_warning(
     main: Callable[[list[str]], int], bench: tuple[Path, list[Path]], capsys: pytest.CaptureFixture[str]
 ) -> None:

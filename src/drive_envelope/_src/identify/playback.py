@@ -23,7 +23,7 @@ from drive_envelope._src.errors import InputError
 from drive_envelope._src.identify.logs import BenchLog, read_bench_log
 from drive_envelope._src.identify.parameters import parameter_units, start_values
 from drive_envelope._src.identify.replay import Replay
-from drive_envelope._src.identify.run import ENGINES, duty_notes, engine_errors, replay_errors
+from drive_envelope._src.identify.run import ENGINES, engine_errors, log_notes, replay_errors
 from drive_envelope._src.identify.stand import IdentifyStand, StandWarning, read_stand
 
 
@@ -62,8 +62,9 @@ def replay_logs(
     """Replay ``logs`` through ``stand`` in ``engine`` (``bag`` and ``joint`` for ROS 2 bags).
 
     Warns:
-        StandWarning: once per log without the sidecar ``kp_duty_per_rad`` other logs have (it is
-            replayed with the stand's ``[servo] duty_per_rad``).
+        StandWarning: as identify warns: once per log without the sidecar ``kp_duty_per_rad`` other
+            logs have (it is replayed with the stand's ``[servo] duty_per_rad``), and per sidecar that
+            names another log or gives a pendulum other than the stand's.
 
     Raises:
         InputError: a bad log, stand or engine, or no log.
@@ -81,7 +82,7 @@ def replay_logs(
         raise InputError(
             f"replay: log file name(s) given twice: {', '.join(twice)}; reports key logs by name"
         )
-    for note in duty_notes(setup, read):  # a gain sweep's log without its sidecar: said, not silent
+    for note in log_notes(setup, read):  # copied or stale sidecars, missing gains: as identify says
         warnings.warn(note, StandWarning, stacklevel=2)
     values = stand_values(setup)
     errors: dict[str, tuple[float, float | None]] = {}

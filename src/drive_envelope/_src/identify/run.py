@@ -200,7 +200,7 @@ def identify(
         engine=engine,
         engine_train=engine_train,
         engine_validation=engine_validation,
-        notes=_log_notes(setup, [*train_logs, *validation_logs])
+        notes=log_notes(setup, [*train_logs, *validation_logs])
         + _bound_notes(space, found.values)
         + canonical_notes,
     )
@@ -363,7 +363,7 @@ def _load_mujoco_plugin() -> None:
 _SIDECAR_TOLERANCE = 0.01  # relative difference of a sidecar's bench number from the stand's
 
 
-def _log_notes(setup: IdentifyStand, logs: list[BenchLog]) -> tuple[str, ...]:
+def log_notes(setup: IdentifyStand, logs: Sequence[BenchLog]) -> tuple[str, ...]:
     """Warnings for sidecars that disagree with their log or the stand (a copied or stale file)."""
     notes = []
     pendulum = setup.scenario.pendulum
