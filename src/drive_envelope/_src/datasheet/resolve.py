@@ -71,24 +71,6 @@ def resolve_with_warnings(
         raise InputError(f"{where}: {exc}") from None
 
 
-def datasheet_warnings(spec: str) -> tuple[str, ...]:
-    """The warnings ``derive`` prints for ``spec`` when it names a datasheet file or a catalog actuator.
-
-    For a command that has resolved ``spec`` by a route of its own (``plot`` also reads a scenario
-    file's envelope): anything that is not a datasheet gives none. The file is read a second time.
-
-    Raises:
-        InputError: as :func:`resolve_envelope`, for a ``spec`` it would refuse.
-    """
-    from drive_envelope._src.datasheet.load import is_datasheet_mapping
-    from drive_envelope._src.io.files import read_mapping
-
-    path = _find_file(spec, None)
-    if path is not None and not is_datasheet_mapping(read_mapping(path)):
-        return ()  # an envelope file or a scenario: nothing is derived, so nothing to warn about
-    return resolve_with_warnings(spec)[1]
-
-
 def _resolve(
     spec: object, base: str | os.PathLike[str] | None, duty: str
 ) -> tuple[PerformanceEnvelope, tuple[str, ...]]:

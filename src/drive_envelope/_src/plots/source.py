@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from drive_envelope._src.datasheet.resolve import resolve_envelope
+from drive_envelope._src.datasheet.resolve import resolve_with_warnings
 from drive_envelope._src.envelope.model import PerformanceEnvelope
 from drive_envelope._src.errors import InputError
 
@@ -21,12 +21,15 @@ def _is_scenario(path: Path) -> bool:
         return False  # let the envelope reader report the problem
 
 
-def envelope_from_argument(spec: str) -> PerformanceEnvelope:
-    """Resolve ``spec`` to an envelope.
+def envelope_from_argument(spec: str) -> tuple[PerformanceEnvelope, tuple[str, ...]]:
+    """Resolve ``spec`` to an envelope, with the warnings ``derive`` gives a datasheet.
 
     Args:
         spec: An envelope file, a datasheet file, a catalog actuator name, or a scenario file (its
             envelope, or the plain ``+-max_effort`` envelope of a drive without one).
+
+    Returns:
+        The envelope and derive's unit-slip warnings (none unless ``spec`` is a datasheet).
 
     Raises:
         InputError: the file or name cannot be read, or a scenario has no finite ``max_effort``.
@@ -40,5 +43,5 @@ def envelope_from_argument(spec: str) -> PerformanceEnvelope:
             raise InputError(
                 f"{spec}: the scenario's drive has no max_effort, so there is no envelope to plot"
             )
-        return envelope
-    return resolve_envelope(spec)
+        return envelope, ()
+    return resolve_with_warnings(spec)

@@ -64,15 +64,13 @@ def _run(args: argparse.Namespace) -> int:
     import warnings
 
     from drive_envelope._src.cli.common import checked_output, print_json, status, warn
-    from drive_envelope._src.datasheet.resolve import datasheet_warnings
     from drive_envelope._src.plots.figure import check_figure_path, plot_envelope, save_figure
     from drive_envelope._src.plots.source import envelope_from_argument
 
     output = checked_output(args.output)
     assert output is not None  # required
     check_figure_path(output)
-    envelope = envelope_from_argument(args.envelope)
-    slips = datasheet_warnings(args.envelope)
+    envelope, slips = envelope_from_argument(args.envelope)
     for line in slips:  # derive's unit-slip warnings for a datasheet, on stderr as derive prints them
         warn(line)
     _check_plottable(envelope, args.envelope)
