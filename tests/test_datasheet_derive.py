@@ -18,6 +18,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from _datasheets import sheet_from
 from drive_envelope._src.datasheet.catalog import load_catalog_datasheet
 from drive_envelope._src.datasheet.derive import derive
 from drive_envelope._src.datasheet.limits import EFFORT_LIMITS, VELOCITY_LIMITS
@@ -41,20 +42,9 @@ BASE_VELOCITY = 12 * math.pi
 BASE_GRADIENT = 0.17 / 0.091**2 / 36
 
 
-def sheet(**sections: dict[str, Any]) -> Any:
+def sheet(**sections: Any) -> Any:
     """BASE with some sections updated (a key set to None is removed)."""
-    data = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        if section in ("name", "joint"):
-            data[section] = values
-            continue
-        table = data.setdefault(section, {})
-        for key, value in values.items():
-            if value is None:
-                table.pop(key, None)
-            else:
-                table[key] = value
-    return datasheet_from_mapping(data, source="test.toml")
+    return sheet_from(BASE, "test.toml", **sections)
 
 
 def test_spec_example_json() -> None:

@@ -7,13 +7,13 @@ V = 24 V. Hand values: 1 rpm = 2*pi/60 rad/s = 0.1047198 rad/s; 1 V/krpm = 1 V /
 
 from __future__ import annotations
 
-import copy
 import math
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from _datasheets import sheet_from
 from drive_envelope._src.cli.main import main
 from drive_envelope._src.datasheet.catalog import catalog_entries, load_catalog_datasheet
 from drive_envelope._src.datasheet.derive import derive
@@ -44,17 +44,9 @@ max_voltage = "24 V"
 """
 
 
-def _sheet(**sections: dict[str, Any]) -> Any:
+def _sheet(**sections: Any) -> Any:
     """BASE with keys of some sections replaced (None removes a key)."""
-    data = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        table = data.setdefault(section, {})
-        for key, value in values.items():
-            if value is None:
-                table.pop(key, None)
-            else:
-                table[key] = value
-    return datasheet_from_mapping(data, source="u.toml")
+    return sheet_from(BASE, "u.toml", **sections)
 
 
 def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
