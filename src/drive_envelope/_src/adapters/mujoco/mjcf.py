@@ -74,6 +74,8 @@ class EquippedJoint:
     """What it replaced, e.g. ``"position 'actuator1'"``, or ``""``."""
     gains_from: str
     """Where the gains came from: the replaced actuator, or the arguments."""
+    kept_gain: str | None = None
+    """``"stiffness"`` or ``"damping"``: the gain kept from the replaced actuator beside one given."""
     where: str = ""
     """The map key or flag the envelope came from (reports group joints by it)."""
     rating: Rating | None = None
@@ -281,13 +283,13 @@ def apply_drives(
             if message.startswith("add_drive("):
                 message = str(_at(item, InputError(message)))
             warnings.warn(message, stacklevel=2)
-        kept = f"{first.kind} {first.name!r}" if first else "given"
+        source = f"{first.kind} {first.name!r}" if first else "given"
+        kept_gain = None
         if stiffness is not None and damping is not None:
             source = "given"
-        elif stiffness is not None or damping is not None:  # one given, the other kept: say which
-            source = f"{'stiffness' if stiffness is not None else 'damping'} given, the other from {kept}"
-        else:
-            source = kept
+        elif first is not None and (stiffness is not None or damping is not None):  # one kept: say which
+            kept_gain = "damping" if stiffness is not None else "stiffness"
+            source = f"{'stiffness' if stiffness is not None else 'damping'} given, the other from {source}"
         done.append(
             EquippedJoint(
                 joint=item.joint,
@@ -298,6 +300,7 @@ def apply_drives(
                 damping=drive.damping,
                 replaced=f"{first.kind} {first.name!r}" if first else "",
                 gains_from=source,
+                kept_gain=kept_gain,
                 where=item.where or item.joint,
                 rating=ratings.get(item.joint),
             )

@@ -163,10 +163,9 @@ def _half_gains(done: list[Any], args: argparse.Namespace) -> list[str]:
     """One line where --stiffness or --damping alone left joints with the replaced actuators' other gain."""
     from drive_envelope._src.format import first_few
 
-    if (args.stiffness is None) == (args.damping is None):
-        return []
-    given, other = ("--stiffness", "damping") if args.stiffness is not None else ("--damping", "stiffness")
-    mixed = [item for item in done if ", the other from " in item.gains_from]
+    given = "--stiffness" if args.stiffness is not None else "--damping"
+    other = "damping" if given == "--stiffness" else "stiffness"
+    mixed = [item for item in done if item.kept_gain is not None]
     if not mixed:
         return []
     units = {("damping", "revolute"): "N*m*s/rad", ("damping", "prismatic"): "N*s/m"}
