@@ -132,8 +132,7 @@ def read_bench_log(
     rows = columns["time"].shape[0]
     if rows < 3:
         raise InputError(f"{label}: {rows} data rows; expected at least 3 samples")
-    _check_grid(columns["time"], label)
-    _check_coarse(columns["time"], label)
+    _check_coarse(_check_grid(columns["time"], label), label)
     _check_magnitudes(columns, label)
     enable = columns.get("torque_enable")
     if enable is not None and not np.isin(enable, (0.0, 1.0)).all():
@@ -236,7 +235,8 @@ def _read_parquet(file: Path, label: str) -> dict[str, FloatArray]:
     return si_arrays(plan, columns, 1)
 
 
-def _check_grid(time: FloatArray, label: str) -> None:
+def _check_grid(time: FloatArray, label: str) -> float:
+    """The log's sampling step [s]; a time that does not increase, or off a uniform grid, is refused."""
     steps = np.diff(time)
     dt = float(np.median(steps))
     if not dt > 0.0:
@@ -248,19 +248,19 @@ def _check_grid(time: FloatArray, label: str) -> None:
             f"{label}: row {row}, column 'time': step {float(steps[off[0]]):.6g} s; expected a uniform grid "
             f"of {dt:.6g} s (+-{100 * _GRID_TOLERANCE:g} %): resample the log"
         )
+    return dt
 
 
 COARSEST_STEP = 0.1
 """A log sampled coarser than this [s] draws a warning: the replay steps at the log's own step."""
 
 
-def _check_coarse(time: FloatArray, label: str) -> None:
+def _check_coarse(dt: float, label: str) -> None:
     """Warn where the sampling step is coarser than :data:`COARSEST_STEP` (a time in ms read as s).
 
     A bare ``time`` header is seconds: a servo log in milliseconds read so replayed at 5 s steps
     (reference and PhysX 643 mrad, MuJoCo diverging to 647 rad), silently.
     """
-    dt = float(np.median(np.diff(time)))
     if dt > COARSEST_STEP:
         warnings.warn(
             f"{label}: samples {dt:.6g} s apart, and the replay steps at the log's own step: a drive needs "
