@@ -218,6 +218,34 @@ def test_bad_numbers_set_between_steps_give_no_effort_and_one_warning(
     assert data.actuator_force[0] == pytest.approx(8.0)
 
 
+def test_numbers_changed_between_good_steps_take_effect_at_the_next_step(
+    mujoco: Any, warnings_seen: list[str]
+) -> None:
+    """Read every changed slot at the next step, although the plugin checks only numbers that changed."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 1.0
+    efforts = []
+    for change in ((0, 8.0), (0, 3.0), (4, 1.0), (7, 1.0), (7, 0.0), (0, -2.0), (0, 3.0)):
+        model.actuator_dynprm[0, change[0]] = change[1]
+        mujoco.mj_resetData(model, data)
+        data.ctrl[0] = 1.0
+        mujoco.mj_step(model, data)
+        efforts.append(float(data.actuator_force[0]))
+    # kp 1000 on a 1 rad error: the cap binds (8, then 3); kp 1: the PD law at the end-of-step
+    # velocity, below the cap; a reserved slot or a negative cap set after good steps: no effort
+    kp1 = efforts[2]
+    assert efforts[:2] == pytest.approx([8.0, 3.0])
+    assert 0.5 < kp1 < 1.0
+    assert efforts[3] == 0.0 and efforts[4] == pytest.approx(kp1) and efforts[5] == 0.0
+    assert efforts[6] == pytest.approx(kp1)
+    # one warning per drive and MjData: the first bad number's
+    assert [w for w in warnings_seen if "dynprm" in w] == [
+        w for w in warnings_seen if "dynprm[7] = 1: reserved" in w
+    ]
+    assert len([w for w in warnings_seen if "dynprm" in w]) == 1
+
+
 def test_a_timestep_made_negative_between_steps_gives_no_effort(
     mujoco: Any, warnings_seen: list[str]
 ) -> None:

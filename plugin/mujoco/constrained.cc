@@ -198,7 +198,7 @@ int CoupledSolver::Constrained(const mjModel* m, mjData* d, double dt) {
 
     // linearised at the checked efforts: v1 = cv + A_c (x - x_checked); the damping is inside
     // A_c, so the rows carry none of their own, and every drive starts from its checked impulse
-    full_ = true;
+    full_ = response_ = true;
     tree_ = false;  // A_c is not M's inverse: the Newton steps take the dense block
     for (int r = 0; r < n; r++) {
       int k = rows_[r].drive;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,6 +68,10 @@ double DampingDerivative(const mjModel* m, const mjData* d, int i) {
   return result;
 }
 
+// mju_isBad and mju_clip, inlined: ReadRequests calls them for every input at every step
+bool IsBad(double x) { return !(x >= -mjMAXVAL && x <= mjMAXVAL); }
+double Clip(double x, double low, double high) { return x < low ? low : (x > high ? high : x); }
+
 bool Disabled(const mjModel* m, int actuator) {
   int group = m->actuator_group[actuator];
   return group >= 0 && group <= 30 && (m->opt.disableactuator & (1 << group));
@@ -83,7 +88,7 @@ double ReadControl(const mjModel* m, const mjData* d, int i) {
     u = read ? *read : result;
   }
   if (!(m->opt.disableflags & mjDSBL_CLAMPCTRL) && m->actuator_ctrllimited[adr]) {
-    u = mju_clip(u, m->actuator_ctrlrange[2 * adr], m->actuator_ctrlrange[2 * adr + 1]);
+    u = Clip(u, m->actuator_ctrlrange[2 * adr], m->actuator_ctrlrange[2 * adr + 1]);
   }
   return u;
 }
@@ -199,6 +204,10 @@ CoupledSolver::CoupledSolver(const mjModel* m, Structure structure)
   }
   solve_work_ = 2 * (m->nC - m->nv) + m->nv;
   warned_.assign(drives_.size() + 2, 0);
+  checked_.assign(drives_.size(), 0);
+  checked_prm_.assign(drives_.size() * mjNDYN, 0);
+  checked_params_.assign(drives_.size(), DriveParams());
+  for (const Drive& drive : drives_) acceleration_ |= drive.drive_type == DriveType::kAcceleration;
 }
 
 void CoupledSolver::Warn(int key, const char* format, const char* name, const char* detail) {
@@ -215,19 +224,13 @@ void CoupledSolver::ReadRequests(const mjModel* m, mjData* d, double dt) {
     Request& q = request_[k];
     q.active = false;
     if (Disabled(m, drive.actuator)) continue;
-    std::string error;
-    if (DriveParams::FromModel(m, drive.actuator, &q.params, &error) >= 0) {
-      std::string name = ActuatorName(m, drive.actuator);
-      Warn(static_cast<int>(k), "drive_envelope.envelope: actuator %s: %s; it gives no effort",
-           name.c_str(), error.c_str());
-      continue;
-    }
+    if (!CachedParams(m, k, &q.params)) continue;
     double u[3] = {0, 0, 0};
     for (int s = 0; s < 3; s++) {
       int i = drive.input[s];
       if (i < 0 || Disabled(m, i)) continue;  // a disabled input contributes nothing
       u[s] = ReadControl(m, d, i);
-      bad |= mju_isBad(u[s]);
+      bad |= IsBad(u[s]);
     }
     q.target_pos = u[0];
     q.target_vel = u[1];
@@ -236,10 +239,35 @@ void CoupledSolver::ReadRequests(const mjModel* m, mjData* d, double dt) {
   }
 
   // MuJoCo zeroes every control when one is bad (mjWARN_BADCTRL); the drives read them alike
-  for (int i = 0; i < m->nu && !bad; i++) bad = mju_isBad(d->ctrl[i]);
+  for (int i = 0; i < m->nu && !bad; i++) bad = IsBad(d->ctrl[i]);
   if (bad) {
     for (Request& q : request_) q.target_pos = q.target_vel = q.ff = 0;
   }
+}
+
+bool CoupledSolver::CachedParams(const mjModel* m, size_t k, DriveParams* params) {
+  // the numbers are read at every step (a user may change them between steps), but checked only
+  // when their bits differ from the last ones that passed: a bad number never passes, so it is
+  // checked (and warned about, once) at every step it stays
+  int actuator = drives_[k].actuator;
+  const mjtNum* prm = m->actuator_dynprm + mjNDYN * actuator;
+  mjtNum* seen = checked_prm_.data() + mjNDYN * k;
+  if (checked_[k] && std::memcmp(prm, seen, sizeof(mjtNum) * mjNDYN) == 0) {
+    *params = checked_params_[k];
+    return true;
+  }
+  std::string error;
+  checked_[k] = 0;
+  if (DriveParams::FromModel(m, actuator, params, &error) >= 0) {
+    std::string name = ActuatorName(m, actuator);
+    Warn(static_cast<int>(k), "drive_envelope.envelope: actuator %s: %s; it gives no effort",
+         name.c_str(), error.c_str());
+    return false;
+  }
+  std::memcpy(seen, prm, sizeof(mjtNum) * mjNDYN);
+  checked_params_[k] = *params;
+  checked_[k] = 1;
+  return true;
 }
 
 void CoupledSolver::SmoothVelocity(const mjModel* m, mjData* d, double dt) {
@@ -314,10 +342,21 @@ void CoupledSolver::RowsOf(const mjData* d, const mjtNum* half, double* out) con
   }
 }
 
-void CoupledSolver::FreeVelocity(double dt, const mjData* d) {
-  // end-of-step velocity of each row without any drive: qvel + h*(M^-1*force)_dof
-  RowsOf(d, force_.data(), vfree_.data());
-  for (int r = 0; r < nrow_; r++) vfree_[r] = qvel_[r] + dt * vfree_[r];
+void CoupledSolver::FreeVelocity(double dt, const mjModel* m, const mjData* d) {
+  // end-of-step velocity of each row without any drive: qvel + h*(M^-1*force)_dof, finishing
+  // HalfSolve's triangular solve (D^-1, then L^-1 as mj_solveLD): cheaper than the rows' z of
+  // Response, which a step inside every envelope never needs
+  mjtNum* x = force_.data();
+  const mjtNum* dinv = d->qLDiagInv;
+  for (int k = 0; k < m->nv; k++) x[k] *= dinv[k];
+  for (int k = 0; k < m->nv; k++) {
+    double sum = 0;
+    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
+      sum += d->qLD[adr] * x[m->M_colind[adr]];
+    }
+    x[k] -= sum;
+  }
+  for (int r = 0; r < nrow_; r++) vfree_[r] = qvel_[r] + dt * x[rows_[r].dof];
 }
 
 void CoupledSolver::ImplicitDamping(const mjModel* m, const mjData* d, double dt) {
@@ -332,8 +371,8 @@ void CoupledSolver::ImplicitDamping(const mjModel* m, const mjData* d, double dt
   }
 }
 
-void CoupledSolver::Response(const mjModel* m, const mjData* d) {
-  // M = L'*D*L, so A = (M^-1) over the rows = Z'*D^-1*Z with Z = L^-T*[e_dof of each row]: solve
+void CoupledSolver::Response(const mjData* d) {
+  // once per step, where a step needs it (EnsureResponse). M = L'*D*L, so A = (M^-1) over the rows = Z'*D^-1*Z with Z = L^-T*[e_dof of each row]: solve
   // for every row at once, dof by dof from the leaves, then add each dof's rank-1 part of A
   const mjtNum* dinv = d->qLDiagInv;
   const mjtNum* ld = d->qLD;
@@ -369,11 +408,16 @@ void CoupledSolver::Response(const mjModel* m, const mjData* d) {
     for (int i = 0; i < member_num_[k]; i++) adiag_[rows[i]] += z[i] * dinv[k] * z[i];
   }
   full_ = false;
-  tree_ = true;
+  response_ = true;
+}
+
+void CoupledSolver::EnsureResponse(const mjData* d) {
+  if (!response_) Response(d);
 }
 
 void CoupledSolver::FullResponse(const mjData* d) {
   if (full_) return;
+  EnsureResponse(d);
   full_ = true;
   const mjtNum* dinv = d->qLDiagInv;
   const double* zd = zd_.data();
@@ -435,9 +479,11 @@ int CoupledSolver::Compute(const mjModel* m, mjData* d) {
   if (any) {
     SmoothVelocity(m, d, dt);
     ImplicitDamping(m, d, dt);
-    Response(m, d);
-    FreeVelocity(dt, d);
+    response_ = full_ = false;
+    tree_ = true;
+    FreeVelocity(dt, m, d);
     if (setting.kind == SolverKind::kExact) {
+      if (acceleration_) EnsureResponse(d);  // Prepare's laws per unit inertia read A_rr
       Prepare(d, dt);
       sweeps = Sweep(m, d, dt);
       if (setting.constraints) sweeps += Constrained(m, d, dt);

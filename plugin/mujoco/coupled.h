@@ -82,11 +82,13 @@ class CoupledSolver {
 
   void Warn(int key, const char* format, const char* name, const char* detail);
   void ReadRequests(const mjModel* m, mjData* d, double dt);
+  bool CachedParams(const mjModel* m, size_t k, DriveParams* params);
   void SmoothVelocity(const mjModel* m, mjData* d, double dt);
   void ImplicitDamping(const mjModel* m, const mjData* d, double dt);
-  void Response(const mjModel* m, const mjData* d);
+  void Response(const mjData* d);
+  void EnsureResponse(const mjData* d);
   void FullResponse(const mjData* d);
-  void FreeVelocity(double dt, const mjData* d);
+  void FreeVelocity(double dt, const mjModel* m, const mjData* d);
   void HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const;
   void RowsOf(const mjData* d, const mjtNum* half, double* out) const;
   void Prepare(const mjData* d, double dt);
@@ -153,6 +155,10 @@ class CoupledSolver {
   int factor_work_ = 0, solve_work_ = 0;  // multiply-adds of TreeFactor and TreeBack
   std::vector<int> free_, fixed_;
   std::vector<char> stale_, warned_;
+  std::vector<char> checked_;            // per drive: checked_prm_ holds numbers that passed
+  std::vector<mjtNum> checked_prm_;      // per drive, its dynprm at the last check (mjNDYN each)
+  std::vector<DriveParams> checked_params_;  // and what they read as
+  bool acceleration_ = false;            // some drive is an acceleration drive
   std::vector<int> released_, flips_;  // per row: last result was 0 (-1: none yet), switches
   bool hold_ = true;  // a row past kMaxFlips lets go (Newton); false in the Gauss-Seidel sweeps
   std::vector<double> held_x_, held_y_, held_effort_;  // Newton's answer while the sweeps try
@@ -162,6 +168,7 @@ class CoupledSolver {
   std::vector<RowResult> result_;
   std::vector<ImplicitDriveDesc> desc_;  // per row, the step's drive law (pgs/tgs)
   std::vector<double> adiag_;            // per row, A_rr (Response; a_ only after FullResponse)
+  bool response_ = false;                // zd_ and adiag_ hold this step's (Response)
   bool full_ = false;                    // a_ holds this step's A
   bool tree_ = true;                     // A = P M^-1 P' (TreeSolve serves), not constrained.cc's
   std::vector<mjtNum> h_, hdinv_, delta_;  // the linear guess's sparse factor and solution

@@ -104,7 +104,9 @@ void CoupledSolver::Prepare(const mjData* d, double dt) {
   int n = nrow_;
   for (int r = 0; r < n; r++) {
     double hd = dt * damp_[r];
-    double response = adiag_[r];
+    // A_rr: read only by acceleration drives and where it may vanish (constrained.cc's A_c);
+    // before Response on M's tree it is at least 1/D_rr > 0
+    double response = response_ ? adiag_[r] : 1;
     double reff = response / (1 + response * hd);
     double c = hd * qvel_[r], alpha = hd;
     int k = rows_[r].drive;
@@ -524,6 +526,7 @@ int CoupledSolver::Sweep(const mjModel* m, const mjData* d, double dt) {
 
 int CoupledSolver::Settle(const mjModel* m, const mjData* d, double dt) {
   // a few Newton steps usually settle every drive; Gauss-Seidel finishes what they leave
+  EnsureResponse(d);
   int n = nrow_;
   int iterations = 0;
   bool converged = Newton(m, d, dt, &iterations);
