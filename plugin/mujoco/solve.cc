@@ -161,46 +161,51 @@ bool CoupledSolver::TreeFactor(const mjModel* m, const mjData* d, const mjtNum* 
   // matrix other than d->M: mj_factorM writes d->qLD, which the constraint solver reads after the
   // drives
   int nv = m->nv;
+  const int *rowadr = m->M_rowadr, *rownnz = m->M_rownnz, *colind = m->M_colind;
   mjtNum* h = h_.data();
-  for (int i = 0; i < m->nC; i++) h[i] = d->M[i];
+  mju_copy(h, d->M, m->nC);
   for (int r = 0; r < nrow_; r++) {
     int dof = rows_[r].dof;
-    h[m->M_rowadr[dof] + m->M_rownnz[dof] - 1] += alpha[r];
+    h[rowadr[dof] + rownnz[dof] - 1] += alpha[r];
   }
-  bool factored = true;
-  for (int k = nv - 1; k >= 0 && factored; k--) {
-    int start = m->M_rowadr[k], diag = m->M_rownnz[k] - 1, end = start + diag;
-    factored = h[end] > mjMINVAL && std::isfinite(h[end]);
-    double inverse = factored ? 1 / h[end] : 0;
+  for (int k = nv - 1; k >= 0; k--) {
+    int start = rowadr[k], end = start + rownnz[k] - 1;
+    double pivot = h[end];
+    if (!(pivot > mjMINVAL && std::isfinite(pivot))) return false;
+    double inverse = 1 / pivot;
     hdinv_[k] = inverse;
     for (int adr = end - 1; adr >= start; adr--) {
-      int i = m->M_colind[adr];
+      // row i < k of the lower triangle, minus row k's part: distinct rows of h, so no aliasing
+      mjtNum* target = h + rowadr[colind[adr]];
+      const mjtNum* source = h + start;
       double scale = -h[adr] * inverse;
-      for (int j = 0, row = m->M_rowadr[i]; j < m->M_rownnz[i]; j++) h[row + j] += h[start + j] * scale;
+      int count = rownnz[colind[adr]];
+#pragma GCC ivdep
+      for (int j = 0; j < count; j++) target[j] += source[j] * scale;
     }
     for (int adr = start; adr < end; adr++) h[adr] *= inverse;
   }
-  return factored;
+  return true;
 }
 
 void CoupledSolver::TreeBack(const mjModel* m, mjtNum* x) const {
   // x = (L'*D*L)^-1 x with TreeFactor's factor, as mj_solveLD
   const mjtNum* h = h_.data();
+  const int *rowadr = m->M_rowadr, *rownnz = m->M_rownnz, *colind = m->M_colind;
   int nv = m->nv;
   for (int k = nv - 1; k > 0; k--) {  // L'^-1
     double xk = x[k];
     if (xk == 0) continue;
-    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-      x[m->M_colind[adr]] -= h[adr] * xk;
+    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
+      x[colind[adr]] -= h[adr] * xk;
     }
   }
-  for (int k = 0; k < nv; k++) x[k] *= hdinv_[k];  // D^-1
-  for (int k = 0; k < nv; k++) {  // L^-1
+  for (int k = 0; k < nv; k++) {  // D^-1, then L^-1
     double sum = 0;
-    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-      sum += h[adr] * x[m->M_colind[adr]];
+    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
+      sum += h[adr] * x[colind[adr]];
     }
-    x[k] -= sum;
+    x[k] = x[k] * hdinv_[k] - sum;
   }
 }
 
