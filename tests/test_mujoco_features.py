@@ -201,13 +201,19 @@ def test_rollout_over_models_uses_each_models_own_envelope(mujoco: Any) -> None:
     np.testing.assert_allclose(velocity[:, 0], [2.0 * 0.01 / 0.5, 8.0 * 0.01 / 0.5], rtol=1e-12)
 
 
+def _capped_stiff_drive(mujoco: Any) -> tuple[Any, Any]:
+    """ONE's drive with an 8 N*m cap and kp 1000, its target 1 rad away: the cap binds."""
+    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
+    data = mujoco.MjData(model)
+    data.ctrl[0] = 1.0
+    return model, data
+
+
 def test_bad_numbers_set_between_steps_give_no_effort_and_one_warning(
     mujoco: Any, warnings_seen: list[str]
 ) -> None:
     """Let the drive go (0) on a NaN or negative number set at run time, warning once per MjData."""
-    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
-    data = mujoco.MjData(model)
-    data.ctrl[0] = 1.0
+    model, data = _capped_stiff_drive(mujoco)
     model.actuator_dynprm[0, 0] = np.nan
     for _ in range(3):
         mujoco.mj_step(model, data)
@@ -222,9 +228,7 @@ def test_numbers_changed_between_good_steps_take_effect_at_the_next_step(
     mujoco: Any, warnings_seen: list[str]
 ) -> None:
     """Read every changed slot at the next step, although the plugin checks only numbers that changed."""
-    model = mujoco.MjModel.from_xml_string(ONE.format(dynprm="8 -1 0 0 1000 0", extra=""))
-    data = mujoco.MjData(model)
-    data.ctrl[0] = 1.0
+    model, data = _capped_stiff_drive(mujoco)
     efforts = []
     for change in ((0, 8.0), (0, 3.0), (4, 1.0), (7, 1.0), (7, 0.0), (0, -2.0), (0, 3.0)):
         model.actuator_dynprm[0, change[0]] = change[1]
