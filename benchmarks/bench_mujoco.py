@@ -228,13 +228,21 @@ def _add_keyframe(spec: Any, robot: Robot) -> None:
 
 
 def build_robot(robot: Robot, kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)) -> Any:
-    """A Menagerie robot: its own position actuators, or its map's drives in their place.
+    """A Menagerie robot, compiled: its own position actuators, or its map's drives in their place."""
+    import mujoco
+
+    model = robot_spec(robot, kind, solver, iterations).compile()
+    hinges = model.jnt_type[model.actuator_trnid[:, 0]] == mujoco.mjtJoint.mjJNT_HINGE
+    assert model.nu == robot.nu and all(hinges)
+    return model
+
+
+def robot_spec(robot: Robot, kind: str, solver: Any = "exact", iterations: tuple[int, int] = (4, 1)) -> Any:
+    """A Menagerie robot's ``MjSpec``: its own position actuators, or its map's drives in their place.
 
     The drives replace each ``position`` actuator in place and keep its kp and kv (``mujoco apply
     --map <robot's map>`` without gains), so both kinds have the model's own gains.
     """
-    import mujoco
-
     from drive_envelope._src.adapters.mujoco.mjcf import Assignment, apply_drives, driven_joints, load_spec
     from drive_envelope._src.adapters.usd.joint_map import match_joints, read_map, resolve_envelopes
     from drive_envelope._src.datasheet.maps import robot_map_path
@@ -260,10 +268,7 @@ def build_robot(robot: Robot, kind: str, solver: Any = "exact", iterations: tupl
         apply_drives(spec, items)
         if solver != "exact":
             set_solver(spec, solver, position_iterations=iterations[0], velocity_iterations=iterations[1])
-    model = spec.compile()
-    hinges = model.jnt_type[model.actuator_trnid[:, 0]] == mujoco.mjtJoint.mjJNT_HINGE
-    assert model.nu == robot.nu and all(hinges)
-    return model
+    return spec
 
 
 def robot_targets(model: Any, robot: Robot, times: np.ndarray) -> np.ndarray:
