@@ -321,13 +321,7 @@ void CoupledSolver::SmoothVelocity(const mjModel* m, mjData* d, double dt) {
 void CoupledSolver::HalfSolve(const mjModel* m, const mjData* d, mjtNum* force) const {
   // only the rows of M^-1*force are needed: e_dof'*M^-1*force = z'*D^-1*(L^-T*force), so one
   // triangular solve here and a dot product per row once z is known (RowsOf)
-  for (int k = m->nv - 1; k > 0; k--) {
-    double fk = force[k];
-    if (fk == 0) continue;
-    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-      force[m->M_colind[adr]] -= d->qLD[adr] * fk;
-    }
-  }
+  SolveTransposed(m, d->qLD, force);
 }
 
 void CoupledSolver::RowsOf(const mjData* d, const mjtNum* half, double* out) const {
@@ -347,15 +341,7 @@ void CoupledSolver::FreeVelocity(double dt, const mjModel* m, const mjData* d) {
   // HalfSolve's triangular solve (D^-1, then L^-1 as mj_solveLD): cheaper than the rows' z of
   // Response, which a step inside every envelope never needs
   mjtNum* x = force_.data();
-  const mjtNum* dinv = d->qLDiagInv;
-  for (int k = 0; k < m->nv; k++) x[k] *= dinv[k];
-  for (int k = 0; k < m->nv; k++) {
-    double sum = 0;
-    for (int adr = m->M_rowadr[k]; adr < m->M_rowadr[k] + m->M_rownnz[k] - 1; adr++) {
-      sum += d->qLD[adr] * x[m->M_colind[adr]];
-    }
-    x[k] -= sum;
-  }
+  SolveDiagonalLower(m, d->qLD, d->qLDiagInv, x);
   for (int r = 0; r < nrow_; r++) vfree_[r] = qvel_[r] + dt * x[rows_[r].dof];
 }
 
@@ -372,8 +358,9 @@ void CoupledSolver::ImplicitDamping(const mjModel* m, const mjData* d, double dt
 }
 
 void CoupledSolver::Response(const mjData* d) {
-  // once per step, where a step needs it (EnsureResponse). M = L'*D*L, so A = (M^-1) over the rows = Z'*D^-1*Z with Z = L^-T*[e_dof of each row]: solve
-  // for every row at once, dof by dof from the leaves, then add each dof's rank-1 part of A
+  // once per step, where a step needs it (EnsureResponse). M = L'*D*L, so A = (M^-1) over the
+  // rows = Z'*D^-1*Z with Z = L^-T*[e_dof of each row]: solve for every row at once, dof by dof
+  // from the leaves, then add each dof's rank-1 part of A
   const mjtNum* dinv = d->qLDiagInv;
   const mjtNum* ld = d->qLD;
   double* zd = zd_.data();

@@ -30,6 +30,31 @@ constexpr double kTolerance = 1e-12;
 // lets go for the rest of it (the release is the clamp's one jump; it could cycle)
 constexpr int kMaxFlips = 2;
 
+// the two triangular passes of a solve with a factor L'*D*L on M's sparsity (mj_solveLD's, on
+// MuJoCo's qLD or the drives' own factor): x = L'^-1 x, and x = L^-1 D^-1 x (dinv = D^-1)
+inline void SolveTransposed(const mjModel* m, const mjtNum* ld, mjtNum* x) {
+  const int *rowadr = m->M_rowadr, *rownnz = m->M_rownnz, *colind = m->M_colind;
+  for (int k = m->nv - 1; k > 0; k--) {
+    double xk = x[k];
+    if (xk == 0) continue;
+    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
+      x[colind[adr]] -= ld[adr] * xk;
+    }
+  }
+}
+
+inline void SolveDiagonalLower(const mjModel* m, const mjtNum* ld, const mjtNum* dinv,
+                               mjtNum* x) {
+  const int *rowadr = m->M_rowadr, *rownnz = m->M_rownnz, *colind = m->M_colind;
+  for (int k = 0; k < m->nv; k++) {
+    double sum = 0;
+    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
+      sum += ld[adr] * x[colind[adr]];
+    }
+    x[k] = x[k] * dinv[k] - sum;
+  }
+}
+
 class CoupledSolver {
  public:
   CoupledSolver(const mjModel* m, Structure structure);

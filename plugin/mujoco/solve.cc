@@ -190,23 +190,8 @@ bool CoupledSolver::TreeFactor(const mjModel* m, const mjData* d, const mjtNum* 
 
 void CoupledSolver::TreeBack(const mjModel* m, mjtNum* x) const {
   // x = (L'*D*L)^-1 x with TreeFactor's factor, as mj_solveLD
-  const mjtNum* h = h_.data();
-  const int *rowadr = m->M_rowadr, *rownnz = m->M_rownnz, *colind = m->M_colind;
-  int nv = m->nv;
-  for (int k = nv - 1; k > 0; k--) {  // L'^-1
-    double xk = x[k];
-    if (xk == 0) continue;
-    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
-      x[colind[adr]] -= h[adr] * xk;
-    }
-  }
-  for (int k = 0; k < nv; k++) {  // D^-1, then L^-1
-    double sum = 0;
-    for (int adr = rowadr[k], end = rowadr[k] + rownnz[k] - 1; adr < end; adr++) {
-      sum += h[adr] * x[colind[adr]];
-    }
-    x[k] = x[k] * hdinv_[k] - sum;
-  }
+  SolveTransposed(m, h_.data(), x);
+  SolveDiagonalLower(m, h_.data(), hdinv_.data(), x);
 }
 
 bool CoupledSolver::TreeUpdate(const mjModel* m) {
